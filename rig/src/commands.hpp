@@ -1,0 +1,23 @@
+// The subcommands of `rig`. Each lives in its own cmd_<name>.cpp, adds itself
+// to the app with its options, --help text and an example, and returns the
+// process exit code through the callback it installs.
+//
+// Exit codes shared by every subcommand: 0 success, 1 a failure while running
+// (hardware, I/O), 2 bad input (the message names the input and what was expected).
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace rig {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitBadInput = 2;
+
+// Set by a subcommand's callback; main() returns it.
+struct ExitStatus {
+  int code = kExitOk;
+};
+
+
+}  // namespace rig

@@ -1,0 +1,115 @@
+// vision::Camera: the pinhole camera with Brown-Conrady lens distortion.
+//
+// Frames and units. A point p_cam (metres) in the camera frame (x right, y down,
+// z forward along the optical axis) projects to the normalized image point
+// (x, y) = (X/Z, Y/Z), is distorted (k1, k2, k3 radial; p1, p2 tangential, the
+// OpenCV / Brown-Conrady "plumb bob" model), and mapped to pixels by the
+// intrinsics. Pixels follow OpenCV's convention: the centre of the top-left
+// pixel is (0, 0).
+//
+//   r2 = x^2 + y^2,  radial = 1 + k1 r2 + k2 r2^2 + k3 r2^3
+//   xd = x radial + 2 p1 x y + p2 (r2 + 2 x^2)
+//   yd = y radial + p1 (r2 + 2 y^2) + 2 p2 x y
+//   u  = fx xd + cx,  v = fy yd + cy
+//
+// The pose solvers work on undistorted normalized points; distortion is handled
+// here, once (see vision/correspondences.hpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <opencv2/core.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vision {
+
+// A calibration file that cannot be read, lacks a key or holds a malformed
+// value. The message names the file and the key.
+class CalibrationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Intrinsics {
+  double fx = 0;  // focal length along u, pixels
+  double fy = 0;  // focal length along v, pixels
+  double cx = 0;  // principal point u, pixels
+  double cy = 0;  // principal point v, pixels
+};
+
+// Brown-Conrady coefficients in OpenCV's order (k1, k2, p1, p2, k3); dimensionless.
+struct Distortion {
+  double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+};
+
+class Camera {
+ public:
+  // Preconditions: fx, fy > 0, width, height > 0 and every value finite;
+  // otherwise std::invalid_argument naming the value.
+  Camera(const Intrinsics& intrinsics, const Distortion& distortion, int width_px, int height_px);
+
+  // The reference paper's Sony XC-555 (Maidi et al. 2010, Table 1): 736x571,
+  // fx 706.1, fy 731.1, cx 388.0, cy 269.6, k1 -0.2279, k2 0.1479,
+  // p1 -0.0007985, p2 0.0006245, k3 0.
+  static Camera paper_default();
+
+  // Loads a calibration file, detecting the format by its content:
+  //  - OpenCV FileStorage (YAML or XML, as written by calibrateCamera tools):
+  //    `camera_matrix` (3x3), `distortion_coefficients` (4, 5 or more values;
+  //    terms past k3 must be zero), `image_width`, `image_height`;
+  //  - ROS camera_info YAML: `image_width`, `image_height`,
+  //    `camera_matrix: {rows, cols, data}`, `distortion_model: plumb_bob`,
+  //    `distortion_coefficients: {rows, cols, data}`.
+  // Throws CalibrationError naming the file and the key on a missing file, a
+  // missing key, a malformed matrix or an unsupported distortion model.
+  static Camera load(const std::string& path);
+
+  // Writes the calibration as an OpenCV FileStorage file (.yaml, .yml or .xml).
+  void save(const std::string& path) const;
+
+  const Intrinsics& intrinsics() const { return intrinsics_; }
+  const Distortion& distortion() const { return distortion_; }
+  int width_px() const { return width_px_; }
+  int height_px() const { return height_px_; }
+  bool has_distortion() const;
+
+  // K as a 3x3 matrix (pixels).
+  Eigen::Matrix3d K() const;
+  // The same model as OpenCV expects it: 3x3 CV_64F and 1x5 CV_64F.
+  cv::Mat camera_matrix_cv() const;
+  cv::Mat distortion_cv() const;
+
+  // Projects a camera-frame point (metres) to distorted pixels. Precondition:
+  // p_cam.z() > 0 (a point on or behind the camera plane yields non-finite or
+  // mirrored pixels; callers check cheirality).
+  Eigen::Vector2d project(const Eigen::Vector3d& p_cam) const;
+
+  // Distorts an undistorted normalized point (x, y) = (X/Z, Y/Z) to pixels.
+  Eigen::Vector2d distort_normalized(const Eigen::Vector2d& xy) const;
+
+  // d(pixel)/d(normalized point) of distort_normalized at xy, 2x2.
+  Eigen::Matrix2d distort_jacobian(const Eigen::Vector2d& xy) const;
+
+  // Inverts the lens model: from an observed (distorted) pixel to the
+  // undistorted normalized point whose projection is that pixel. Newton's
+  // method on the 2x2 distortion Jacobian, stopped when the re-distorted point
+  // is within 1e-9 px of the input. Returns false (and leaves xy NaN) when the
+  // iteration does not reach that, which happens only outside the region where
+  // the polynomial model is invertible (far beyond the image for real lenses).
+  bool undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) const;
+
+  // undistort_point over many pixels; a point that does not converge is NaN.
+  std::vector<Eigen::Vector2d> undistort_points(const std::vector<Eigen::Vector2d>& pixels) const;
+
+  // Tolerance of undistort_point, in pixels on the image.
+  static constexpr double kUndistortTolerancePx = 1e-9;
+
+ private:
+  Intrinsics intrinsics_;
+  Distortion distortion_;
+  int width_px_;
+  int height_px_;
+};
+
+}  // namespace vision

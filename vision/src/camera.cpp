@@ -1,0 +1,261 @@
+#include "vision/camera.hpp"
+
+#include <Eigen/LU>
+#include <cmath>
+#include <fstream>
+#include <opencv2/core/persistence.hpp>
+#include <sstream>
+
+namespace vision {
+namespace {
+
+bool finite_all(std::initializer_list<double> values) {
+  for (double v : values)
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+std::string lower_extension(const std::string& path) {
+  const auto dot = path.find_last_of('.');
+  if (dot == std::string::npos) return "";
+  std::string ext = path.substr(dot + 1);
+  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return ext;
+}
+
+[[noreturn]] void fail(const std::string& path, const std::string& key, const std::string& what) {
+  throw CalibrationError("calibration file '" + path + "': key '" + key + "' " + what);
+}
+
+int read_int(const cv::FileNode& root, const std::string& path, const std::string& key) {
+  const cv::FileNode n = root[key];
+  if (n.empty()) fail(path, key, "is missing (expected a positive integer)");
+  if (!n.isInt()) fail(path, key, "must be a positive integer");
+  const int v = static_cast<int>(n);
+  if (v <= 0) fail(path, key, "must be a positive integer, got " + std::to_string(v));
+  return v;
+}
+
+// Reads a numeric matrix stored either as an OpenCV matrix (`!!opencv-matrix`
+// or XML `type_id="opencv-matrix"`) or as a ROS map {rows, cols, data}.
+// Returns the values row-major and the shape.
+std::vector<double> read_matrix(const cv::FileNode& root, const std::string& path,
+                                const std::string& key, int* rows, int* cols) {
+  const cv::FileNode n = root[key];
+  if (n.empty()) fail(path, key, "is missing");
+  std::vector<double> values;
+  if (n.isMap() && !n["dt"].empty()) {
+    cv::Mat m;
+    try {
+      n >> m;
+    } catch (const cv::Exception& e) {
+      fail(path, key, std::string("is not a readable matrix: ") + e.what());
+    }
+    if (m.empty()) fail(path, key, "is an empty matrix");
+    m.convertTo(m, CV_64F);
+    *rows = m.rows;
+    *cols = m.cols;
+    values.assign(m.begin<double>(), m.end<double>());
+  } else if (n.isMap() && !n["data"].empty()) {
+    if (!n["rows"].isInt() || !n["cols"].isInt()) fail(path, key, "must give integer rows and cols");
+    *rows = static_cast<int>(n["rows"]);
+    *cols = static_cast<int>(n["cols"]);
+    const cv::FileNode data = n["data"];
+    if (!data.isSeq()) fail(path, key, "data must be a sequence of numbers");
+    for (const auto& item : data) {
+      if (!item.isReal() && !item.isInt()) fail(path, key, "data holds a value that is not a number");
+      values.push_back(static_cast<double>(item));
+    }
+    if (static_cast<int>(values.size()) != *rows * *cols)
+      fail(path, key,
+           "has " + std::to_string(values.size()) + " values but rows x cols = " +
+               std::to_string(*rows) + "x" + std::to_string(*cols));
+  } else if (n.isSeq()) {
+    for (const auto& item : n) {
+      if (!item.isReal() && !item.isInt()) fail(path, key, "holds a value that is not a number");
+      values.push_back(static_cast<double>(item));
+    }
+    *rows = 1;
+    *cols = static_cast<int>(values.size());
+  } else {
+    fail(path, key, "is not a matrix (expected an OpenCV matrix or {rows, cols, data})");
+  }
+  for (double v : values)
+    if (!std::isfinite(v)) fail(path, key, "holds a value that is not finite");
+  return values;
+}
+
+}  // namespace
+
+Camera::Camera(const Intrinsics& intrinsics, const Distortion& distortion, int width_px,
+               int height_px)
+    : intrinsics_(intrinsics), distortion_(distortion), width_px_(width_px), height_px_(height_px) {
+  if (!finite_all({intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy}) ||
+      intrinsics.fx <= 0 || intrinsics.fy <= 0)
+    throw std::invalid_argument("camera intrinsics: fx and fy must be finite and > 0, cx and cy finite");
+  if (!finite_all({distortion.k1, distortion.k2, distortion.p1, distortion.p2, distortion.k3}))
+    throw std::invalid_argument("camera distortion: every coefficient must be finite");
+  if (width_px <= 0 || height_px <= 0)
+    throw std::invalid_argument("camera image size: width and height must be > 0, got " +
+                                std::to_string(width_px) + "x" + std::to_string(height_px));
+}
+
+Camera Camera::paper_default() {
+  return Camera({706.1, 731.1, 388.0, 269.6}, {-0.2279, 0.1479, -0.0007985, 0.0006245, 0.0}, 736,
+                571);
+}
+
+Camera Camera::load(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw CalibrationError("calibration file '" + path + "': cannot be opened");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  std::string text = buffer.str();
+  if (text.find_first_not_of(" \t\r\n") == std::string::npos)
+    throw CalibrationError("calibration file '" + path + "': is empty");
+
+  // OpenCV's YAML reader insists on its "%YAML:1.0" header; ROS camera_info
+  // files are plain YAML, so give them one.
+  const bool xml = text.compare(0, 5, "<?xml") == 0 || lower_extension(path) == "xml";
+  int flags = cv::FileStorage::READ | cv::FileStorage::MEMORY;
+  if (xml) {
+    flags |= cv::FileStorage::FORMAT_XML;
+  } else {
+    flags |= cv::FileStorage::FORMAT_YAML;
+    if (text.compare(0, 5, "%YAML") != 0) text = "%YAML:1.0\n---\n" + text;
+  }
+  cv::FileStorage fs;
+  try {
+    fs.open(text, flags);
+  } catch (const cv::Exception& e) {
+    throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration: " +
+                           e.what());
+  }
+  if (!fs.isOpened())
+    throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration");
+  const cv::FileNode root = fs.root();
+
+  const int width = read_int(root, path, "image_width");
+  const int height = read_int(root, path, "image_height");
+
+  int rows = 0, cols = 0;
+  const auto k = read_matrix(root, path, "camera_matrix", &rows, &cols);
+  if (rows != 3 || cols != 3)
+    fail(path, "camera_matrix",
+         "must be 3x3, got " + std::to_string(rows) + "x" + std::to_string(cols));
+  if (k[1] != 0 || k[3] != 0 || k[6] != 0 || k[7] != 0 || k[8] != 1)
+    fail(path, "camera_matrix", "must have the form [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
+  if (k[0] <= 0 || k[4] <= 0) fail(path, "camera_matrix", "must have fx > 0 and fy > 0");
+
+  const cv::FileNode model = root["distortion_model"];
+  if (!model.empty()) {
+    const std::string name = static_cast<std::string>(model);
+    if (name != "plumb_bob" && name != "rational_polynomial")
+      fail(path, "distortion_model", "'" + name + "' is not supported (expected plumb_bob)");
+  }
+  const auto d = read_matrix(root, path, "distortion_coefficients", &rows, &cols);
+  if ((rows != 1 && cols != 1) || d.size() < 4)
+    fail(path, "distortion_coefficients",
+         "must be a vector of 4, 5 or more values (k1 k2 p1 p2 [k3 ...])");
+  for (size_t i = 5; i < d.size(); ++i)
+    if (d[i] != 0)
+      fail(path, "distortion_coefficients",
+           "has a non-zero term past k3 (rational or thin-prism model), which this camera model "
+           "does not represent");
+  const Distortion dist{d[0], d[1], d[2], d[3], d.size() > 4 ? d[4] : 0.0};
+  return Camera({k[0], k[4], k[2], k[5]}, dist, width, height);
+}
+
+void Camera::save(const std::string& path) const {
+  cv::FileStorage fs(path, cv::FileStorage::WRITE);
+  if (!fs.isOpened()) throw CalibrationError("calibration file '" + path + "': cannot be written");
+  fs << "image_width" << width_px_ << "image_height" << height_px_;
+  fs << "camera_matrix" << camera_matrix_cv() << "distortion_coefficients" << distortion_cv();
+}
+
+bool Camera::has_distortion() const {
+  const auto& d = distortion_;
+  return d.k1 != 0 || d.k2 != 0 || d.p1 != 0 || d.p2 != 0 || d.k3 != 0;
+}
+
+Eigen::Matrix3d Camera::K() const {
+  Eigen::Matrix3d k;
+  k << intrinsics_.fx, 0, intrinsics_.cx, 0, intrinsics_.fy, intrinsics_.cy, 0, 0, 1;
+  return k;
+}
+
+cv::Mat Camera::camera_matrix_cv() const {
+  return (cv::Mat_<double>(3, 3) << intrinsics_.fx, 0, intrinsics_.cx, 0, intrinsics_.fy,
+          intrinsics_.cy, 0, 0, 1);
+}
+
+cv::Mat Camera::distortion_cv() const {
+  const auto& d = distortion_;
+  return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
+}
+
+Eigen::Vector2d Camera::project(const Eigen::Vector3d& p_cam) const {
+  return distort_normalized(p_cam.head<2>() / p_cam.z());
+}
+
+Eigen::Vector2d Camera::distort_normalized(const Eigen::Vector2d& xy) const {
+  const auto& d = distortion_;
+  const double x = xy.x(), y = xy.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  const double xd = x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x);
+  const double yd = y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y;
+  return {intrinsics_.fx * xd + intrinsics_.cx, intrinsics_.fy * yd + intrinsics_.cy};
+}
+
+Eigen::Matrix2d Camera::distort_jacobian(const Eigen::Vector2d& xy) const {
+  const auto& d = distortion_;
+  const double x = xy.x(), y = xy.y();
+  const double r2 = x * x + y * y;
+  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
+  // d(radial)/d(r2), and d(r2)/dx = 2x, d(r2)/dy = 2y.
+  const double dradial = d.k1 + r2 * (2 * d.k2 + 3 * d.k3 * r2);
+  Eigen::Matrix2d j;
+  j(0, 0) = radial + x * dradial * 2 * x + 2 * d.p1 * y + d.p2 * 6 * x;
+  j(0, 1) = x * dradial * 2 * y + 2 * d.p1 * x + d.p2 * 2 * y;
+  j(1, 0) = y * dradial * 2 * x + d.p1 * 2 * x + 2 * d.p2 * y;
+  j(1, 1) = radial + y * dradial * 2 * y + d.p1 * 6 * y + 2 * d.p2 * x;
+  j.row(0) *= intrinsics_.fx;
+  j.row(1) *= intrinsics_.fy;
+  return j;
+}
+
+bool Camera::undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  *xy = Eigen::Vector2d(nan, nan);
+  if (!pixel.allFinite()) return false;
+  // Start from the distorted normalized point: for real lenses the correction
+  // is small and Newton converges quadratically from there in 3-6 steps.
+  Eigen::Vector2d x((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
+                    (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
+  constexpr int kMaxIterations = 50;
+  for (int i = 0; i < kMaxIterations; ++i) {
+    const Eigen::Vector2d residual = distort_normalized(x) - pixel;  // pixels
+    if (!residual.allFinite()) return false;
+    if (residual.norm() <= kUndistortTolerancePx) {
+      *xy = x;
+      return true;
+    }
+    const Eigen::Matrix2d j = distort_jacobian(x);
+    const double det = j.determinant();
+    // A vanishing Jacobian determinant marks the fold of the polynomial model,
+    // beyond which it is not invertible.
+    if (!(std::abs(det) > 1e-12 * intrinsics_.fx * intrinsics_.fy)) return false;
+    x -= j.inverse() * residual;
+  }
+  return false;
+}
+
+std::vector<Eigen::Vector2d> Camera::undistort_points(
+    const std::vector<Eigen::Vector2d>& pixels) const {
+  std::vector<Eigen::Vector2d> out(pixels.size());
+  for (size_t i = 0; i < pixels.size(); ++i) undistort_point(pixels[i], &out[i]);
+  return out;
+}
+
+}  // namespace vision
