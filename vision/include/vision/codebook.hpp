@@ -52,19 +52,23 @@ struct DecodeResult {
   int bits_corrected = 0;  // Hamming distance between observed and that rotated code
 };
 
+struct CodebookOptions {
+  // Minimum Hamming distance between any two of the 4 * size() rotated codes
+  // (see the trade-off above). Must be in [1, 16]; std::invalid_argument otherwise.
+  int min_hamming_distance = 5;
+  // Largest number of wrong cells decode() corrects. -1 means
+  // correctable_bits() = floor((d - 1) / 2). Values above correctable_bits()
+  // are clamped to it (beyond, decoding would not be unique). Fewer corrected
+  // bits: fewer false identifications of clutter, more rejected real markers
+  // whose code cells are misread (blur, glare, occlusion).
+  int max_correction_bits = 1;
+};
+
 class Codebook {
  public:
-  struct Options {
-    // Minimum Hamming distance between any two of the 4 * size() rotated codes
-    // (see the trade-off above). Must be in [1, 16]; std::invalid_argument otherwise.
-    int min_hamming_distance = 5;
-    // Largest number of wrong cells decode() corrects. -1 means
-    // correctable_bits() = floor((d - 1) / 2). Values above correctable_bits()
-    // are clamped to it (beyond, decoding would not be unique). Fewer corrected
-    // bits: fewer false identifications of clutter, more rejected real markers
-    // whose code cells are misread (blur, glare, occlusion).
-    int max_correction_bits = 1;
-  };
+  // Declared outside the class so that `Options{}` can be a default argument
+  // (GCC rejects a nested aggregate with member initializers there).
+  using Options = CodebookOptions;
 
   explicit Codebook(Options options = {});
 
