@@ -1,0 +1,287 @@
+#include "vision/gige_source.hpp"
+
+#include <arv.h>
+
+#include <cstring>
+#include <utility>
+
+namespace vision {
+namespace {
+
+// Takes ownership of a GError and returns its message ("" for none).
+std::string take_message(GError* error) {
+  if (error == nullptr) return "";
+  std::string message = error->message != nullptr ? error->message : "unknown error";
+  g_error_free(error);
+  return message;
+}
+
+const char* status_name(ArvBufferStatus status) {
+  switch (status) {
+    case ARV_BUFFER_STATUS_SUCCESS:
+      return "success";
+    case ARV_BUFFER_STATUS_CLEARED:
+      return "cleared";
+    case ARV_BUFFER_STATUS_TIMEOUT:
+      return "packet timeout";
+    case ARV_BUFFER_STATUS_MISSING_PACKETS:
+      return "missing packets";
+    case ARV_BUFFER_STATUS_WRONG_PACKET_ID:
+      return "wrong packet id";
+    case ARV_BUFFER_STATUS_SIZE_MISMATCH:
+      return "size mismatch";
+    case ARV_BUFFER_STATUS_FILLING:
+      return "still filling";
+    case ARV_BUFFER_STATUS_ABORTED:
+      return "aborted";
+    default:
+      return "unknown";
+  }
+}
+
+void on_control_lost(ArvDevice* /*device*/, gpointer flag) {
+  static_cast<std::atomic<bool>*>(flag)->store(true);
+}
+
+}  // namespace
+
+struct GigeSource::Impl {
+  ArvCamera* camera = nullptr;
+  ArvStream* stream = nullptr;
+  gulong control_lost_handler = 0;
+  std::atomic<bool> control_lost{false};
+  // A trigger was sent and its frame has not been delivered yet: only then
+  // does a grab that times out trigger again.
+  bool trigger_pending = false;
+  // The camera stopped answering control commands: close() then does not wait
+  // for it to acknowledge AcquisitionStop.
+  bool unreachable = false;
+  bool has_last_id = false;
+  uint64_t last_id = 0;
+
+  // Counts the frames missing between the previous frame id and `id`. GigE
+  // Vision 1.x block ids are 16 bits, skip 0 and wrap 65535 -> 1, so they are
+  // compared modulo 65535; extended (64-bit) ids compare directly.
+  void note_frame_id(uint64_t id, CaptureCounters& counters) {
+    if (has_last_id) {
+      uint64_t step = 0;
+      if (id <= 0xFFFF && last_id <= 0xFFFF)
+        step = (id + 65535 - last_id) % 65535;
+      else if (id > last_id)
+        step = id - last_id;
+      if (step > 1) counters.lost += step - 1;
+    }
+    has_last_id = true;
+    last_id = id;
+  }
+};
+
+GigeSource::GigeSource(std::string device, CaptureOptions options)
+    : device_(std::move(device)), options_(std::move(options)) {}
+
+GigeSource::~GigeSource() {
+  close();
+}
+
+void GigeSource::open() {
+  if (impl_) return;
+  auto impl = std::make_unique<Impl>();
+  const std::string who = name();
+  GError* error = nullptr;
+  impl->camera = arv_camera_new(device_.c_str(), &error);
+  if (impl->camera == nullptr)
+    throw CaptureError(who, "no GigE Vision camera answers (" + take_message(error) +
+                                "); `arv-tool-0.8` lists the cameras Aravis can see");
+  if (!arv_camera_is_gv_device(impl->camera)) {
+    g_object_unref(impl->camera);
+    throw CaptureError(who, "device is not a GigE Vision camera");
+  }
+  // Closes what was opened so far if a step below throws.
+  struct Guard {
+    GigeSource* self;
+    std::unique_ptr<Impl>* impl;
+    bool armed = true;
+    ~Guard() {
+      if (!armed) return;
+      self->impl_ = std::move(*impl);
+      self->close();
+    }
+  } guard{this, &impl};
+
+  // The id as Aravis's discovery lists it: vendor-model-serial.
+  const char* vendor = arv_camera_get_vendor_name(impl->camera, nullptr);
+  const char* model = arv_camera_get_model_name(impl->camera, nullptr);
+  const char* serial = arv_camera_get_device_serial_number(impl->camera, nullptr);
+  device_id_ =
+      std::string(vendor ? vendor : "") + "-" + (model ? model : "") + "-" + (serial ? serial : "");
+  impl->control_lost_handler = g_signal_connect(arv_camera_get_device(impl->camera), "control-lost",
+                                                G_CALLBACK(on_control_lost), &impl->control_lost);
+
+  auto check = [&](const std::string& what) {
+    if (error != nullptr) throw CaptureError(who, what + " refused: " + take_message(error));
+  };
+  arv_camera_set_acquisition_mode(impl->camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
+  check("AcquisitionMode=Continuous");
+  arv_camera_set_pixel_format_from_string(impl->camera, options_.pixel_format.c_str(), &error);
+  check("PixelFormat=" + options_.pixel_format);
+  if (options_.width || options_.height || options_.offset_x || options_.offset_y) {
+    gint x = 0, y = 0, w = 0, h = 0;
+    arv_camera_get_region(impl->camera, &x, &y, &w, &h, &error);
+    check("reading the region");
+    arv_camera_set_region(impl->camera, options_.offset_x.value_or(x),
+                          options_.offset_y.value_or(y), options_.width.value_or(w),
+                          options_.height.value_or(h), &error);
+    check("region " + std::to_string(options_.width.value_or(w)) + "x" +
+          std::to_string(options_.height.value_or(h)) + "+" +
+          std::to_string(options_.offset_x.value_or(x)) + "+" +
+          std::to_string(options_.offset_y.value_or(y)));
+  }
+  if (options_.exposure_us) {
+    arv_camera_set_exposure_time(impl->camera, *options_.exposure_us, &error);
+    check("exposure time " + std::to_string(*options_.exposure_us) + " us");
+  }
+  if (options_.gain) {
+    arv_camera_set_gain(impl->camera, *options_.gain, &error);
+    check("gain " + std::to_string(*options_.gain));
+  }
+  if (options_.software_trigger) {
+    arv_camera_set_trigger(impl->camera, "Software", &error);
+    check("software trigger (TriggerMode=On, TriggerSource=Software)");
+  } else {
+    arv_camera_clear_triggers(impl->camera, &error);
+    check("free run (TriggerMode=Off)");
+    if (options_.frame_rate_hz) {
+      arv_camera_set_frame_rate(impl->camera, *options_.frame_rate_hz, &error);
+      check("frame rate " + std::to_string(*options_.frame_rate_hz) + " Hz");
+    }
+  }
+
+  // The plain UDP socket, not Aravis's packet socket (which needs CAP_NET_RAW
+  // and bypasses the socket buffer): the same path whoever runs the rig.
+  arv_camera_gv_set_stream_options(impl->camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+  impl->stream = arv_camera_create_stream(impl->camera, nullptr, nullptr, &error);
+  check("creating the stream");
+  g_object_set(impl->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
+               "socket-buffer-size", options_.socket_buffer_bytes, "packet-resend",
+               options_.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS
+                                      : ARV_GV_STREAM_PACKET_RESEND_NEVER,
+               nullptr);
+  const guint payload = arv_camera_get_payload(impl->camera, &error);
+  check("reading PayloadSize");
+  for (int i = 0; i < options_.n_buffers; ++i)
+    arv_stream_push_buffer(impl->stream, arv_buffer_new_allocate(payload));
+  arv_camera_start_acquisition(impl->camera, &error);
+  check("AcquisitionStart");
+
+  guard.armed = false;
+  impl_ = std::move(impl);
+  counters_ = {};
+}
+
+void GigeSource::trigger() {
+  if (!impl_) throw CaptureError(name(), "trigger() before open()");
+  // Frames already queued were exposed before this trigger: not the one asked for.
+  while (ArvBuffer* buffer = arv_stream_try_pop_buffer(impl_->stream)) {
+    impl_->note_frame_id(arv_buffer_get_frame_id(buffer), counters_);
+    if (arv_buffer_get_status(buffer) == ARV_BUFFER_STATUS_SUCCESS)
+      ++counters_.discarded;
+    else
+      ++counters_.incomplete;
+    arv_stream_push_buffer(impl_->stream, buffer);
+  }
+  if (!options_.software_trigger) return;
+  GError* error = nullptr;
+  arv_camera_software_trigger(impl_->camera, &error);
+  if (error != nullptr) {
+    impl_->unreachable = true;
+    throw CaptureError(name(), "TriggerSoftware failed: " + take_message(error));
+  }
+  impl_->trigger_pending = true;
+}
+
+Frame GigeSource::grab(std::chrono::milliseconds timeout) {
+  if (!impl_) throw CaptureError(name(), "grab() before open()");
+  const std::string who = name();
+  for (int attempt = 0;; ++attempt) {
+    // Free run: wait again. Software trigger: trigger again, but only for a
+    // trigger of ours still unanswered (never expose a frame nobody asked for).
+    const bool may_retry =
+        attempt < options_.retries && (!options_.software_trigger || impl_->trigger_pending);
+    ArvBuffer* buffer =
+        arv_stream_timeout_pop_buffer(impl_->stream, static_cast<guint64>(timeout.count()) * 1000);
+    if (impl_->control_lost.load()) {
+      impl_->unreachable = true;
+      throw CaptureError(who, "control of the camera lost (no heartbeat answer): camera gone?");
+    }
+    if (buffer == nullptr) {
+      ++counters_.timeouts;
+      if (!may_retry)
+        throw CaptureTimeout(who, "no frame within " + std::to_string(timeout.count()) +
+                                      " ms, after " + std::to_string(attempt) + " retries");
+      ++counters_.retries;
+      if (options_.software_trigger) trigger();
+      continue;
+    }
+    impl_->note_frame_id(arv_buffer_get_frame_id(buffer), counters_);
+    const ArvBufferStatus status = arv_buffer_get_status(buffer);
+    const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
+    size_t size = 0;
+    const void* data =
+        status == ARV_BUFFER_STATUS_SUCCESS ? arv_buffer_get_image_data(buffer, &size) : nullptr;
+    const int width = data != nullptr ? arv_buffer_get_image_width(buffer) : 0;
+    const int height = data != nullptr ? arv_buffer_get_image_height(buffer) : 0;
+    const ArvPixelFormat format = data != nullptr ? arv_buffer_get_image_pixel_format(buffer) : 0;
+    const int bits = ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format);
+    const int type = bits == 8 ? CV_8UC1 : bits == 16 ? CV_16UC1 : -1;
+    const bool whole = data != nullptr && width > 0 && height > 0 && type >= 0 &&
+                       size >= static_cast<size_t>(width) * height * (bits / 8);
+    if (data != nullptr && type < 0) {
+      arv_stream_push_buffer(impl_->stream, buffer);
+      throw CaptureError(
+          who, "pixel format 0x" + [&] {
+            char hex[16];
+            std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(format));
+            return std::string(hex);
+          }() + " is not a mono 8 or 16 bit format; use Mono8");
+    }
+    if (!whole) {
+      ++counters_.incomplete;
+      arv_stream_push_buffer(impl_->stream, buffer);
+      if (!may_retry)
+        throw CaptureError(who, "frame " + std::to_string(frame_id) + " incomplete (" +
+                                    (data != nullptr ? "short payload" : status_name(status)) +
+                                    "), after " + std::to_string(attempt) + " retries");
+      ++counters_.retries;
+      if (options_.software_trigger) trigger();
+      continue;
+    }
+    Frame frame;
+    frame.image = cv::Mat(height, width, type, const_cast<void*>(data)).clone();
+    frame.frame_id = frame_id;
+    frame.camera_timestamp_ns = arv_buffer_get_timestamp(buffer);
+    frame.host_time = std::chrono::system_clock::time_point(
+        std::chrono::duration_cast<std::chrono::system_clock::duration>(
+            std::chrono::nanoseconds(arv_buffer_get_system_timestamp(buffer))));
+    frame.origin = who;
+    arv_stream_push_buffer(impl_->stream, buffer);
+    ++counters_.delivered;
+    impl_->trigger_pending = false;
+    return frame;
+  }
+}
+
+void GigeSource::close() {
+  if (!impl_) return;
+  if (impl_->camera != nullptr) {
+    if (impl_->stream != nullptr && !impl_->unreachable)
+      arv_camera_stop_acquisition(impl_->camera, nullptr);
+    if (impl_->control_lost_handler != 0)
+      g_signal_handler_disconnect(arv_camera_get_device(impl_->camera),
+                                  impl_->control_lost_handler);
+  }
+  if (impl_->stream != nullptr) g_object_unref(impl_->stream);
+  if (impl_->camera != nullptr) g_object_unref(impl_->camera);
+  impl_.reset();
+}
+
+}  // namespace vision
