@@ -19,5 +19,7 @@ struct ExitStatus {
   int code = kExitOk;
 };
 
+// rig capture --camera SPEC --frames N --out DIR (cmd_capture.cpp).
+void add_capture_command(CLI::App& app, ExitStatus& status);
 
 }  // namespace rig

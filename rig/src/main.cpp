@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);
   rig::ExitStatus status;
+  rig::add_capture_command(app, status);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
