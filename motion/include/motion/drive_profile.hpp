@@ -1,0 +1,135 @@
+// motion::DriveProfile: everything ModbusBench knows about a drive, read from a
+// TOML file (config/benches/*.toml), never from code. The default map of the
+// simulated bench is in /work/shared/DESIGN.md ("Simulated bench: default Modbus
+// register map") and ships as config/benches/sim.toml; a documented template
+// for a real drive is config/benches/template_real_drive.toml.
+//
+// Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
+// Positions are signed 32-bit two's complement counts in two consecutive
+// registers, in the profile's word order; counts_per_mm converts them to mm.
+// Every field is required except the [alarms] table; a missing, unknown,
+// mistyped or inconsistent field throws ProfileError naming it.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <string_view>
+
+namespace motion {
+
+// Order of the two 16-bit words of a 32-bit value. kHighFirst: the register at
+// the lower address holds bits 31..16 (DESIGN.md default, Oriental Motor AZ);
+// kLowFirst: it holds bits 15..0 (many IAI and PLC maps).
+enum class WordOrder { kHighFirst, kLowFirst };
+
+// Which table the drive's feedback (actual position, status, alarm) lives in:
+// input registers (function 04) or holding registers (function 03). Many real
+// drives expose everything as holding registers.
+enum class RegisterTable { kInput, kHolding };
+
+struct RegisterMap {
+  // Holding registers written by the driver.
+  int target_x = 0;  // first of 2 registers, int32 counts
+  int target_y = 2;  // first of 2 registers, int32 counts
+  int speed = 4;     // 1 register, unsigned, speed units (see DriveProfile)
+  int command = 5;   // 1 register, command codes (see CommandCodes)
+  // Feedback read by the driver, in `feedback`'s table.
+  RegisterTable feedback = RegisterTable::kInput;
+  int actual_x = 0;  // first of 2 registers, int32 counts
+  int actual_y = 2;  // first of 2 registers, int32 counts
+  int status = 4;    // 1 register of status bits (see StatusBits)
+  int alarm = 5;     // 1 register, alarm code (0 = none)
+};
+
+// Bit positions (0..15) in the status register.
+struct StatusBits {
+  int homed = 0;
+  int moving = 1;
+  int in_position = 2;  // positioning complete (IAI "PEND")
+  int alarm = 3;
+  int emergency_stop = 4;
+};
+
+// Values written to the command register.
+struct CommandCodes {
+  std::uint16_t move_absolute = 1;
+  std::uint16_t home = 2;
+  std::uint16_t stop = 3;
+  std::uint16_t reset_alarm = 4;
+};
+
+// The box the driver is allowed to command, mm. A move outside is refused
+// before anything is sent (SoftLimitError). Keep it inside the drive's own
+// travel limits so the drive's limit alarm is never the first line of defence.
+struct SoftLimits {
+  double x_min_mm = 0, x_max_mm = 0;
+  double y_min_mm = 0, y_max_mm = 0;
+  bool contains(double x_mm, double y_mm) const {
+    return x_mm >= x_min_mm && x_mm <= x_max_mm && y_mm >= y_min_mm && y_mm <= y_max_mm;
+  }
+};
+
+struct Timing {
+  // Modbus response timeout. Shorter detects a dead link sooner; too short
+  // turns a slow drive (RTU at low baud, busy gateway) into reconnect storms.
+  int response_timeout_ms = 200;
+  // How long the driver keeps trying to reconnect (with backoff) before it
+  // raises BenchLinkError. Longer rides out a gateway reboot; shorter stops a
+  // sweep sooner when a cable is really unplugged.
+  int reconnect_timeout_ms = 3000;
+  // Interval between status reads in wait_settled. Shorter notices settling
+  // sooner at the cost of more bus traffic (matters on RTU).
+  int poll_interval_ms = 5;
+  // The bench must stay in position for this long before it counts as
+  // settled. Longer lets mechanical ringing die out; it adds to every point.
+  int settle_time_ms = 20;
+  // Default wait_settled timeout for a move, and for homing.
+  int settle_timeout_ms = 10000;
+  int home_timeout_ms = 30000;
+};
+
+struct DriveProfile {
+  std::string name;    // free text, for logs
+  std::string source;  // file it was read from (for messages)
+  int unit_id = 1;     // Modbus unit (slave) id, 1..247, or 255 for TCP
+  WordOrder word_order = WordOrder::kHighFirst;
+  double counts_per_mm = 1000;      // position register units per mm (1000 = µm)
+  double speed_units_per_mm_s = 1;  // speed register units per mm/s
+  double default_speed_mm_s = 50;   // written with every move
+  double max_speed_mm_s = 100;      // set_speed refuses more
+  // wait_settled requires |read-back - target| <= this on both axes, mm. At
+  // least one count; tighter than the drive's in-position band never settles.
+  double position_tolerance_mm = 0.005;
+  double home_x_mm = 0, home_y_mm = 0;  // where the bench is after homing
+  RegisterMap registers;
+  StatusBits status_bits;
+  CommandCodes commands;
+  SoftLimits soft_limits;
+  Timing timing;
+  std::map<int, std::string> alarm_meanings;  // code -> meaning
+
+  // mm -> counts, rounded to nearest. Precondition: the result fits in int32
+  // (guaranteed for values inside the validated soft limits).
+  std::int32_t to_counts(double mm) const;
+  double to_mm(std::int32_t counts) const { return counts / counts_per_mm; }
+  // The profile's text for an alarm code, or "unknown alarm code N".
+  std::string alarm_meaning(int code) const;
+};
+
+// Reads and validates a profile file. Throws ProfileError naming the file and
+// the field. Top-level tables other than the profile's own (e.g. [sim], read by
+// the simulated bench) are ignored; unknown keys inside the profile's tables
+// are refused, so a typo never silently falls back to a default.
+DriveProfile load_drive_profile(const std::string& path);
+DriveProfile parse_drive_profile(std::string_view toml_text, const std::string& source);
+
+// Checks a profile built in code the same way a file is checked. Throws
+// ProfileError naming profile.source and the inconsistent field.
+void validate(const DriveProfile& profile);
+
+// 32-bit two's complement value <-> two registers in the given word order.
+void encode_int32(std::int32_t value, WordOrder order, std::uint16_t out[2]);
+std::int32_t decode_int32(const std::uint16_t in[2], WordOrder order);
+
+}  // namespace motion

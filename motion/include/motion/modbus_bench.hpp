@@ -1,0 +1,93 @@
+// motion::ModbusBench: a Bench driven over Modbus (TCP or RTU) by a
+// DriveProfile. Everything drive-specific (addresses, word order, units, bits,
+// command codes, timeouts, alarm texts, soft limits) comes from the profile.
+//
+// Guarantees:
+//  - a target outside the profile's soft limits is refused before anything is
+//    sent (SoftLimitError); a target inside is quantized to counts towards the
+//    inside, so no position outside the limits is ever written;
+//  - every write is read back and compared (BenchWriteError on a mismatch or
+//    a Modbus exception response);
+//  - reconnect watchdog: when the link fails (timeout, reset, EPIPE, garbled
+//    frame) the link is closed and re-opened with exponential backoff
+//    (10 ms doubling to 500 ms) for up to the profile's reconnect_timeout_ms.
+//    After every reconnect the bench state is re-read before anything else:
+//    an alarm raises BenchFault; a bench that has lost its home, or whose
+//    target registers no longer hold the target of a move in progress, raises
+//    BenchLinkError (a drive that restarted); otherwise the interrupted
+//    operation is repeated (all of them are idempotent: absolute targets and
+//    reads) and the caller never notices.
+//
+// Not thread-safe: one bench, one thread.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+
+#include "motion/bench.hpp"
+#include "motion/bench_url.hpp"
+#include "motion/drive_profile.hpp"
+#include "motion/modbus_link.hpp"
+
+namespace motion {
+
+class ModbusBench : public Bench {
+ public:
+  // Connects (with the reconnect watchdog) and reads the status once. Throws
+  // BenchLinkError if the drive cannot be reached within the profile's
+  // reconnect timeout.
+  ModbusBench(const BenchUrl& url, DriveProfile profile);
+
+  void home() override;
+  void move_to(double x_mm, double y_mm) override;
+  BenchStatus wait_settled(std::chrono::milliseconds timeout) override;
+  XY position() override;
+  BenchStatus status() override;
+  void stop() override;
+  void reset_alarm() override;
+
+  // Speed written with every following move, mm/s. Throws SoftLimitError if
+  // not in (0, profile.max_speed_mm_s].
+  void set_speed(double speed_mm_s);
+
+  const DriveProfile& profile() const { return profile_; }
+  // How many times the watchdog has re-established the link (for logs, tests).
+  int reconnects() const { return reconnects_; }
+
+ private:
+  enum class Pending { kNone, kMove, kHome, kStop };
+
+  // Runs `op` (returns 0 or an errno); on a link error reconnects and runs it
+  // again, at most a few times. A Modbus exception response is returned.
+  template <class Op>
+  int transact(const char* what, Op op);
+  void reconnect(const char* what);
+  void check_state_after_reconnect(const BenchStatus& s);
+  int read_feedback(BenchStatus& out);
+  int read_targets(std::array<std::int32_t, 2>& counts);
+  // Writes registers (address -> value), grouped into contiguous runs, and
+  // reads every run back.
+  void write_verified(const char* what, const std::map<int, std::uint16_t>& values);
+  void command(const char* what, std::uint16_t code);
+  BenchStatus decode_feedback(const std::uint16_t* block, int first) const;
+
+  DriveProfile profile_;
+  ModbusLink link_;
+  double speed_mm_s_;
+  // The contiguous feedback block read in one transaction, when it fits.
+  int feedback_first_ = 0;
+  int feedback_count_ = 0;
+
+  // What the driver has commanded, to check against after a reconnect.
+  Pending pending_ = Pending::kNone;
+  std::optional<XY> target_mm_;
+  std::array<std::int32_t, 2> target_counts_{};
+  bool homed_seen_ = false;
+  int reconnects_ = 0;
+};
+
+}  // namespace motion

@@ -1,0 +1,370 @@
+// ModbusBench: moves, settling, read-back verification and the reconnect
+// watchdog (see modbus_bench.hpp).
+#include "motion/modbus_bench.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <sstream>
+#include <thread>
+#include <vector>
+
+#include "motion/errors.hpp"
+
+namespace motion {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using std::chrono::milliseconds;
+
+// The Modbus PDU limit for one read (function 03/04).
+constexpr int kMaxReadRegisters = 125;
+// Link failures tolerated within one operation before giving up; each one is
+// followed by a full reconnect (with its own timeout and state re-read).
+constexpr int kMaxAttempts = 5;
+constexpr milliseconds kBackoffFirst{10};
+constexpr milliseconds kBackoffMax{500};
+
+std::string fmt_mm(double v) {
+  std::ostringstream s;
+  s.precision(6);
+  s << v;
+  return s.str();
+}
+
+}  // namespace
+
+ModbusBench::ModbusBench(const BenchUrl& url, DriveProfile profile)
+    : profile_(std::move(profile)),
+      link_(url, url.unit.value_or(profile_.unit_id),
+            milliseconds(profile_.timing.response_timeout_ms)),
+      speed_mm_s_(profile_.default_speed_mm_s) {
+  const RegisterMap& r = profile_.registers;
+  const int first = std::min({r.actual_x, r.actual_y, r.status, r.alarm});
+  const int last = std::max({r.actual_x + 1, r.actual_y + 1, r.status, r.alarm});
+  if (last - first + 1 <= kMaxReadRegisters) {
+    feedback_first_ = first;
+    feedback_count_ = last - first + 1;
+  }
+  reconnect("connect");
+}
+
+void ModbusBench::reconnect(const char* what) {
+  const auto deadline = Clock::now() + milliseconds(profile_.timing.reconnect_timeout_ms);
+  milliseconds backoff = kBackoffFirst;
+  int err = 0;
+  for (;;) {
+    err = link_.connect();
+    BenchStatus s;
+    if (err == 0) err = read_feedback(s);
+    if (err == 0) {
+      check_state_after_reconnect(s);
+      return;
+    }
+    if (!ModbusLink::is_link_error(err)) {
+      throw BenchError("bench " + link_.url().str() + ": reading the status after " + what +
+                       " failed: " + ModbusLink::describe(err) +
+                       " (do the profile's feedback registers exist on this drive?)");
+    }
+    link_.close();
+    if (Clock::now() + backoff > deadline) break;
+    std::this_thread::sleep_for(backoff);
+    backoff = std::min(backoff * 2, kBackoffMax);
+  }
+  throw BenchLinkError("bench " + link_.url().str() + ": link down during " + what +
+                       ", not re-established within link.reconnect_timeout_ms = " +
+                       std::to_string(profile_.timing.reconnect_timeout_ms) +
+                       " ms: " + ModbusLink::describe(err));
+}
+
+void ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
+  if (s.alarm) {
+    throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
+                         " (" + s.alarm_meaning + ") found after reconnect",
+                     s.alarm_code, s.alarm_meaning);
+  }
+  if (homed_seen_ && !s.homed) {
+    pending_ = Pending::kNone;
+    throw BenchLinkError("bench " + link_.url().str() +
+                         ": after reconnect the bench is no longer homed (drive restarted?); "
+                         "its position is unknown: home it before moving");
+  }
+  if (s.homed) homed_seen_ = true;
+  if (pending_ == Pending::kMove) {
+    std::array<std::int32_t, 2> counts{};
+    const int err = read_targets(counts);
+    if (err != 0) {
+      throw BenchLinkError(
+          "bench " + link_.url().str() +
+          ": reading the targets after reconnect failed: " + ModbusLink::describe(err));
+    }
+    if (counts != target_counts_) {
+      pending_ = Pending::kNone;
+      throw BenchLinkError("bench " + link_.url().str() +
+                           ": after reconnect the target registers hold (" +
+                           std::to_string(counts[0]) + ", " + std::to_string(counts[1]) +
+                           ") counts, not the commanded (" + std::to_string(target_counts_[0]) +
+                           ", " + std::to_string(target_counts_[1]) + "): drive restarted?");
+    }
+  }
+  spdlog::debug("bench {}: state read: ({}, {}) mm, homed {}, moving {}", link_.url().str(),
+                s.position.x_mm, s.position.y_mm, s.homed, s.moving);
+}
+
+template <class Op>
+int ModbusBench::transact(const char* what, Op op) {
+  for (int attempt = 1;; ++attempt) {
+    if (!link_.connected()) {
+      reconnect(what);
+      ++reconnects_;
+      spdlog::warn("bench {}: link re-established during {}; state re-read, resuming",
+                   link_.url().str(), what);
+    }
+    const int err = op();
+    if (err == 0 || !ModbusLink::is_link_error(err)) return err;
+    spdlog::warn("bench {}: link failed during {}: {} (attempt {} of {})", link_.url().str(), what,
+                 ModbusLink::describe(err), attempt, kMaxAttempts);
+    link_.close();
+    if (attempt == kMaxAttempts) {
+      throw BenchLinkError("bench " + link_.url().str() + ": " + what + " failed " +
+                           std::to_string(kMaxAttempts) +
+                           " times in a row: " + ModbusLink::describe(err));
+    }
+  }
+}
+
+BenchStatus ModbusBench::decode_feedback(const std::uint16_t* block, int first) const {
+  const RegisterMap& r = profile_.registers;
+  const StatusBits& b = profile_.status_bits;
+  BenchStatus s;
+  s.position.x_mm = profile_.to_mm(decode_int32(block + (r.actual_x - first), profile_.word_order));
+  s.position.y_mm = profile_.to_mm(decode_int32(block + (r.actual_y - first), profile_.word_order));
+  const std::uint16_t bits = block[r.status - first];
+  auto bit = [bits](int n) { return ((bits >> n) & 1u) != 0; };
+  s.homed = bit(b.homed);
+  s.moving = bit(b.moving);
+  s.in_position = bit(b.in_position);
+  s.alarm = bit(b.alarm);
+  s.emergency_stop = bit(b.emergency_stop);
+  s.alarm_code = block[r.alarm - first];
+  if (s.alarm_code != 0) s.alarm_meaning = profile_.alarm_meaning(s.alarm_code);
+  return s;
+}
+
+int ModbusBench::read_feedback(BenchStatus& out) {
+  const RegisterMap& r = profile_.registers;
+  if (feedback_count_ > 0) {
+    std::uint16_t block[kMaxReadRegisters];
+    const int err = link_.read(r.feedback, feedback_first_, feedback_count_, block);
+    if (err == 0) out = decode_feedback(block, feedback_first_);
+    return err;
+  }
+  // Scattered map: one read per field, assembled into a block indexed from 0.
+  std::vector<std::uint16_t> block(65537, 0);
+  for (auto [addr, n] :
+       {std::pair<int, int>{r.actual_x, 2}, {r.actual_y, 2}, {r.status, 1}, {r.alarm, 1}}) {
+    if (const int err = link_.read(r.feedback, addr, n, block.data() + addr); err != 0) return err;
+  }
+  out = decode_feedback(block.data(), 0);
+  return 0;
+}
+
+int ModbusBench::read_targets(std::array<std::int32_t, 2>& counts) {
+  const RegisterMap& r = profile_.registers;
+  std::uint16_t x[2], y[2];
+  if (int err = link_.read(RegisterTable::kHolding, r.target_x, 2, x); err != 0) return err;
+  if (int err = link_.read(RegisterTable::kHolding, r.target_y, 2, y); err != 0) return err;
+  counts = {decode_int32(x, profile_.word_order), decode_int32(y, profile_.word_order)};
+  return 0;
+}
+
+void ModbusBench::write_verified(const char* what, const std::map<int, std::uint16_t>& values) {
+  // Contiguous runs of addresses become one write (function 16) each.
+  std::vector<std::pair<int, std::vector<std::uint16_t>>> runs;
+  for (const auto& [addr, value] : values) {
+    if (!runs.empty() && runs.back().first + static_cast<int>(runs.back().second.size()) == addr) {
+      runs.back().second.push_back(value);
+    } else {
+      runs.push_back({addr, {value}});
+    }
+  }
+  for (const auto& [addr, regs] : runs) {
+    const int n = static_cast<int>(regs.size());
+    std::vector<std::uint16_t> back(regs.size());
+    const int err = transact(what, [&] {
+      if (int e = link_.write(addr, n, regs.data()); e != 0) return e;
+      return link_.read(RegisterTable::kHolding, addr, n, back.data());
+    });
+    const std::string range =
+        "holding registers " + std::to_string(addr) + ".." + std::to_string(addr + n - 1);
+    if (err != 0) {
+      throw BenchWriteError("bench " + link_.url().str() + ": " + what + ": the drive refused " +
+                            range + ": " + ModbusLink::describe(err));
+    }
+    if (back != regs) {
+      std::ostringstream msg;
+      msg << "bench " << link_.url().str() << ": " << what << ": " << range << " read back [";
+      for (int i = 0; i < n; ++i)
+        msg << (i ? " " : "") << back[i];
+      msg << "] after writing [";
+      for (int i = 0; i < n; ++i)
+        msg << (i ? " " : "") << regs[i];
+      msg << "]";
+      throw BenchWriteError(msg.str());
+    }
+  }
+}
+
+void ModbusBench::command(const char* what, std::uint16_t code) {
+  write_verified(what, {{profile_.registers.command, code}});
+}
+
+void ModbusBench::set_speed(double speed_mm_s) {
+  if (!(speed_mm_s > 0) || speed_mm_s > profile_.max_speed_mm_s) {
+    throw SoftLimitError("speed " + fmt_mm(speed_mm_s) + " mm/s is outside (0, " +
+                         fmt_mm(profile_.max_speed_mm_s) + "] (motion.max_speed_mm_s of " +
+                         profile_.source + ")");
+  }
+  speed_mm_s_ = speed_mm_s;
+}
+
+void ModbusBench::move_to(double x_mm, double y_mm) {
+  const SoftLimits& lim = profile_.soft_limits;
+  if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !lim.contains(x_mm, y_mm)) {
+    throw SoftLimitError("move to (" + fmt_mm(x_mm) + ", " + fmt_mm(y_mm) +
+                         ") mm refused, nothing sent: outside the soft limits x [" +
+                         fmt_mm(lim.x_min_mm) + ", " + fmt_mm(lim.x_max_mm) + "], y [" +
+                         fmt_mm(lim.y_min_mm) + ", " + fmt_mm(lim.y_max_mm) + "] mm of " +
+                         profile_.source);
+  }
+  // Quantize towards the inside: a target within half a count of a limit must
+  // not round to a position beyond it.
+  auto quantize = [&](double v, double lo, double hi) {
+    std::int32_t c = profile_.to_counts(v);
+    if (profile_.to_mm(c) > hi)
+      c = static_cast<std::int32_t>(std::floor(hi * profile_.counts_per_mm));
+    if (profile_.to_mm(c) < lo)
+      c = static_cast<std::int32_t>(std::ceil(lo * profile_.counts_per_mm));
+    return c;
+  };
+  const std::array<std::int32_t, 2> counts = {quantize(x_mm, lim.x_min_mm, lim.x_max_mm),
+                                              quantize(y_mm, lim.y_min_mm, lim.y_max_mm)};
+
+  const RegisterMap& r = profile_.registers;
+  std::map<int, std::uint16_t> regs;
+  std::uint16_t words[2];
+  encode_int32(counts[0], profile_.word_order, words);
+  regs[r.target_x] = words[0];
+  regs[r.target_x + 1] = words[1];
+  encode_int32(counts[1], profile_.word_order, words);
+  regs[r.target_y] = words[0];
+  regs[r.target_y + 1] = words[1];
+  regs[r.speed] =
+      static_cast<std::uint16_t>(std::lround(speed_mm_s_ * profile_.speed_units_per_mm_s));
+
+  // The previous target no longer describes the drive while this one is being
+  // written: a reconnect in between re-reads and resumes the write.
+  pending_ = Pending::kNone;
+  write_verified("move_to (targets)", regs);
+  command("move_to (command)", profile_.commands.move_absolute);
+  pending_ = Pending::kMove;
+  target_counts_ = counts;
+  target_mm_ = XY{profile_.to_mm(counts[0]), profile_.to_mm(counts[1])};
+}
+
+void ModbusBench::home() {
+  pending_ = Pending::kNone;
+  command("home", profile_.commands.home);
+  // The drive loses its reference while it homes; from here homed is
+  // re-learnt from the drive.
+  homed_seen_ = false;
+  pending_ = Pending::kHome;
+  target_mm_ = XY{profile_.home_x_mm, profile_.home_y_mm};
+}
+
+void ModbusBench::stop() {
+  command("stop", profile_.commands.stop);
+  pending_ = Pending::kStop;
+  target_mm_.reset();
+}
+
+void ModbusBench::reset_alarm() {
+  command("reset_alarm", profile_.commands.reset_alarm);
+  const BenchStatus s = status();
+  if (s.alarm) {
+    throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
+                         " (" + s.alarm_meaning + ") persists after reset",
+                     s.alarm_code, s.alarm_meaning);
+  }
+}
+
+BenchStatus ModbusBench::status() {
+  BenchStatus s;
+  const int err = transact("status", [&] { return read_feedback(s); });
+  if (err != 0) {
+    throw BenchError("bench " + link_.url().str() + ": reading the status failed: " +
+                     ModbusLink::describe(err) + " (check registers.* of " + profile_.source + ")");
+  }
+  if (s.homed) homed_seen_ = true;
+  return s;
+}
+
+XY ModbusBench::position() {
+  return status().position;
+}
+
+BenchStatus ModbusBench::wait_settled(milliseconds timeout) {
+  const auto start = Clock::now();
+  const auto deadline = start + timeout;
+  const auto settle_time = milliseconds(profile_.timing.settle_time_ms);
+  // A read-back within the tolerance, plus a hair (1 nm) for the mm <-> counts
+  // conversion in floating point.
+  const double tol = profile_.position_tolerance_mm + 1e-6;
+  bool settling = false;
+  Clock::time_point settled_since = start;
+  for (;;) {
+    const BenchStatus s = status();
+    if (s.alarm) {
+      pending_ = Pending::kNone;
+      throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
+                           " (" + s.alarm_meaning + ") at (" + fmt_mm(s.position.x_mm) + ", " +
+                           fmt_mm(s.position.y_mm) + ") mm",
+                       s.alarm_code, s.alarm_meaning);
+    }
+    if (s.emergency_stop) {
+      pending_ = Pending::kNone;
+      throw BenchFault("bench " + link_.url().str() + ": emergency stop at (" +
+                           fmt_mm(s.position.x_mm) + ", " + fmt_mm(s.position.y_mm) + ") mm",
+                       s.alarm_code, s.alarm_code ? s.alarm_meaning : "emergency stop");
+    }
+    bool ok = !s.moving;
+    if (pending_ != Pending::kStop && pending_ != Pending::kNone) {
+      ok = ok && s.in_position;
+    }
+    if (pending_ == Pending::kHome) ok = ok && s.homed;
+    if (target_mm_) {
+      ok = ok && std::fabs(s.position.x_mm - target_mm_->x_mm) <= tol &&
+           std::fabs(s.position.y_mm - target_mm_->y_mm) <= tol;
+    }
+    const auto now = Clock::now();
+    if (ok && !settling) settled_since = now;
+    settling = ok;
+    if (ok && now - settled_since >= settle_time) return s;
+    if (now >= deadline) {
+      std::ostringstream msg;
+      msg << "bench " << link_.url().str() << ": not settled after " << timeout.count()
+          << " ms: at (" << fmt_mm(s.position.x_mm) << ", " << fmt_mm(s.position.y_mm) << ") mm";
+      if (target_mm_) {
+        msg << ", target (" << fmt_mm(target_mm_->x_mm) << ", " << fmt_mm(target_mm_->y_mm)
+            << ") mm";
+      }
+      msg << ", moving " << s.moving << ", in position " << s.in_position << ", homed " << s.homed;
+      throw BenchTimeout(msg.str());
+    }
+    std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
+  }
+}
+
+}  // namespace motion
