@@ -1,0 +1,84 @@
+// The scene renderer's time per 736x571 frame (issue 3, §3 and §7: at most
+// 15 ms on one core) with the paper's camera and sheet, realistic defaults.
+//   scripts/bench bench_renderer
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <opencv2/core/utility.hpp>
+
+#include "sim/scene_renderer.hpp"
+
+namespace {
+
+// Camera looking at the sheet from `distance_m`, tilted by tilt_deg about the
+// target's x and y axes (the sheet centred in the view).
+vision::Pose pose_at(double distance_m, double tilt_deg) {
+  const double a = tilt_deg * M_PI / 180;
+  vision::Pose T;
+  T.R = (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(0.6 * a, Eigen::Vector3d::UnitX()))
+            .toRotationMatrix();
+  T.t = Eigen::Vector3d(0.0, 0.0, distance_m);
+  return T;
+}
+
+const sim::SceneRenderer& renderer(const sim::SceneOptions& options = {}) {
+  static const vision::Codebook codebook;
+  static const sim::SceneRenderer r(vision::Camera::paper_default(),
+                                    vision::Target::paper_default(), codebook, options);
+  return r;
+}
+
+// args: distance in cm, tilt in degrees.
+void BM_RenderFrame(benchmark::State& state) {
+  const sim::SceneRenderer& r = renderer();
+  const vision::Pose T = pose_at(state.range(0) / 100.0, static_cast<double>(state.range(1)));
+  uint64_t seed = 1;
+  for (auto _ : state) {
+    sim::RenderedFrame frame = r.render(T, seed++);
+    benchmark::DoNotOptimize(frame.image.data);
+  }
+}
+BENCHMARK(BM_RenderFrame)
+    ->ArgNames({"distance_cm", "tilt_deg"})
+    ->Args({10, 0})
+    ->Args({10, 40})
+    ->Args({40, 20})
+    ->Args({70, 30})
+    ->Args({100, 0})
+    ->Args({100, 40})
+    ->Unit(benchmark::kMillisecond);
+
+void BM_RenderMovingFrame(benchmark::State& state) {
+  const sim::SceneRenderer& r = renderer();
+  const vision::Pose a = pose_at(0.40, 10), b = pose_at(0.41, 12);
+  uint64_t seed = 1;
+  for (auto _ : state) {
+    sim::RenderedFrame frame = r.render_moving(a, b, seed++);
+    benchmark::DoNotOptimize(frame.image.data);
+  }
+}
+BENCHMARK(BM_RenderMovingFrame)->Unit(benchmark::kMillisecond);
+
+void BM_BuildRayTable(benchmark::State& state) {
+  const vision::Codebook codebook;
+  for (auto _ : state) {
+    sim::SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                         codebook);
+    benchmark::DoNotOptimize(&r);
+  }
+}
+BENCHMARK(BM_BuildRayTable)->Unit(benchmark::kMillisecond)->Iterations(3);
+
+}  // namespace
+
+// One core, as the target is stated: OpenCV's own thread pool (GaussianBlur)
+// is limited to the calling thread.
+int main(int argc, char** argv) {
+  cv::setNumThreads(1);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
