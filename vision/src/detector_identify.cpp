@@ -1,0 +1,142 @@
+// Identification: the 6x6 cell grid read through the homography of the refined
+// corners (Maidi et al. 2010, eq. 30) and decoded in four orientations.
+//
+// The homography maps marker cell coordinates (u, v) in [0, 6]^2 (u along
+// A->B, v along A->D of the candidate) to the undistorted normalized plane,
+// where a plane's image is exactly projective; each sample point is then
+// distorted into the image. Computing eq. 30 in distorted pixels instead
+// would misplace cells by up to a few pixels on large markers near the image
+// border.
+#include <Eigen/LU>
+#include <algorithm>
+
+#include "detector_internal.hpp"
+
+namespace vision::detail {
+namespace {
+
+// H with H * (u, v, 1) ~ (x, y, 1) for the unit-square corners (0,0), (6,0),
+// (6,6), (0,6) and the four normalized corners (DLT with h33 = 1).
+Eigen::Matrix3d square_homography(const std::array<Eigen::Vector2d, 4>& x) {
+  const double s = kMarkerCells;
+  const Eigen::Vector2d uv[4] = {{0, 0}, {s, 0}, {s, s}, {0, s}};
+  Eigen::Matrix<double, 8, 8> a;
+  Eigen::Matrix<double, 8, 1> b;
+  for (int i = 0; i < 4; ++i) {
+    const double u = uv[i].x(), v = uv[i].y(), X = x[i].x(), Y = x[i].y();
+    a.row(2 * i) << u, v, 1, 0, 0, 0, -u * X, -v * X;
+    a.row(2 * i + 1) << 0, 0, 0, u, v, 1, -u * Y, -v * Y;
+    b(2 * i) = X;
+    b(2 * i + 1) = Y;
+  }
+  const Eigen::Matrix<double, 8, 1> h = a.partialPivLu().solve(b);
+  Eigen::Matrix3d H;
+  H << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
+  return H;
+}
+
+class GridReader {
+ public:
+  GridReader(const cv::Mat& gray, const Camera& camera, const Eigen::Matrix3d& H)
+      : gray_(gray), camera_(camera), H_(H) {}
+
+  // Image position of marker cell coordinates (u, v); false outside the image.
+  bool pixel(double u, double v, Eigen::Vector2d* px) const {
+    const Eigen::Vector3d x = H_ * Eigen::Vector3d(u, v, 1);
+    if (!(x.z() > 0)) return false;
+    *px = camera_.distort_normalized(x.head<2>() / x.z());
+    return inside_image(gray_, *px, 0);
+  }
+
+  // Mean of a 3x3 lattice spanning `fraction` of the cell centred at (u, v).
+  bool mean(double u, double v, double fraction, double* value) const {
+    double sum = 0;
+    for (int a = -1; a <= 1; ++a)
+      for (int b = -1; b <= 1; ++b) {
+        Eigen::Vector2d px;
+        if (!pixel(u + 0.5 * fraction * a, v + 0.5 * fraction * b, &px)) return false;
+        sum += sample_bilinear(gray_, px.x(), px.y());
+      }
+    *value = sum / 9;
+    return true;
+  }
+
+ private:
+  const cv::Mat& gray_;
+  const Camera& camera_;
+  Eigen::Matrix3d H_;
+};
+
+}  // namespace
+
+std::optional<Identification> identify(const cv::Mat& gray, const Camera& camera,
+                                       const EdgeFit& fit, const Codebook& codebook,
+                                       const DetectorParameters& p) {
+  const GridReader grid(gray, camera, square_homography(fit.corners_norm));
+  const double f = p.cell_sample_fraction;
+
+  // Cells: border (row or column 0 or 5) and code.
+  double cells[kMarkerCells][kMarkerCells];
+  double black = 0;
+  for (int r = 0; r < kMarkerCells; ++r)
+    for (int c = 0; c < kMarkerCells; ++c) {
+      if (!grid.mean(c + 0.5, r + 0.5, f, &cells[r][c])) return std::nullopt;
+      if (r == 0 || c == 0 || r == kMarkerCells - 1 || c == kMarkerCells - 1) black += cells[r][c];
+    }
+  black /= 4 * (kMarkerCells - 1);
+
+  // The white reference: the quiet zone, half a cell outside each side
+  // (median, so that a stray dark spot in it does not pull the threshold).
+  std::vector<double> outside;
+  for (int k = 0; k < kMarkerCells; ++k) {
+    const double m = k + 0.5, out_lo = -0.5, out_hi = kMarkerCells + 0.5;
+    for (const auto& uv : {Eigen::Vector2d(m, out_lo), Eigen::Vector2d(out_hi, m),
+                           Eigen::Vector2d(m, out_hi), Eigen::Vector2d(out_lo, m)}) {
+      double v;
+      if (grid.mean(uv.x(), uv.y(), 0.5 * f, &v)) outside.push_back(v);
+    }
+  }
+  if (outside.size() < 8) return std::nullopt;
+  std::nth_element(outside.begin(), outside.begin() + outside.size() / 2, outside.end());
+  const double white = outside[outside.size() / 2];
+
+  Identification id;
+  id.contrast = white - black;
+  if (id.contrast < p.min_contrast) return std::nullopt;
+  const double threshold = 0.5 * (white + black);
+  const double margin = p.min_cell_margin * id.contrast;
+
+  int border_errors = 0;
+  for (int r = 0; r < kMarkerCells; ++r)
+    for (int c = 0; c < kMarkerCells; ++c)
+      if ((r == 0 || c == 0 || r == kMarkerCells - 1 || c == kMarkerCells - 1) &&
+          cells[r][c] > threshold - margin)
+        ++border_errors;
+  if (border_errors > p.max_border_errors) return std::nullopt;
+
+  uint16_t bits = 0, uncertain = 0;
+  for (int r = 0; r < kCodeCells; ++r)
+    for (int c = 0; c < kCodeCells; ++c) {
+      const double v = cells[r + 1][c + 1];
+      const auto bit = static_cast<uint16_t>(1u << Codebook::bit_index(r, c));
+      if (v > threshold) bits |= bit;
+      if (std::abs(v - threshold) < margin) uncertain |= bit;
+    }
+  const auto decoded = codebook.decode(bits);
+  if (!decoded) return std::nullopt;
+  // An uncertain cell read right is still a guess: it counts as corrected.
+  const uint16_t expected =
+      Codebook::rotate_clockwise(codebook.code(decoded->id), decoded->rotation);
+  const int corrected =
+      Codebook::hamming_distance(0, static_cast<uint16_t>((bits ^ expected) | uncertain));
+  const int max_corrected = p.max_bits_corrected < 0
+                                ? codebook.max_correction_bits()
+                                : std::min(p.max_bits_corrected, codebook.max_correction_bits());
+  if (corrected > max_corrected) return std::nullopt;
+  id.id = decoded->id;
+  id.rotation = decoded->rotation;
+  id.bits_corrected = corrected;
+  return id;
+}
+
+}  // namespace vision::detail

@@ -1,0 +1,73 @@
+// Internals of vision::Detector shared by its three stages (not installed):
+// quadrilateral candidates (detector_quads.cpp), sub-pixel sides
+// (detector_edges.cpp) and identification (detector_identify.cpp).
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cmath>
+#include <opencv2/core.hpp>
+#include <optional>
+#include <vector>
+
+#include "vision/camera.hpp"
+#include "vision/codebook.hpp"
+#include "vision/detector.hpp"
+
+namespace vision::detail {
+
+// Four image points, visually clockwise in the image (x right, y down), so
+// that for every side q[i] -> q[i+1] the marker lies to the right.
+using Quad = std::array<Eigen::Vector2d, 4>;
+
+// Bilinear interpolation of an 8-bit grey image at (x, y), OpenCV pixel
+// convention. Precondition: 0 <= x <= cols - 1 and 0 <= y <= rows - 1
+// (callers check the margin once per side, not per sample).
+inline double sample_bilinear(const cv::Mat& gray, double x, double y) {
+  const int x0 = std::min(static_cast<int>(x), gray.cols - 2);
+  const int y0 = std::min(static_cast<int>(y), gray.rows - 2);
+  const double fx = x - x0, fy = y - y0;
+  const uint8_t* r0 = gray.ptr<uint8_t>(y0) + x0;
+  const uint8_t* r1 = r0 + gray.step[0];
+  const double top = r0[0] + fx * (r0[1] - r0[0]);
+  const double bottom = r1[0] + fx * (r1[1] - r1[0]);
+  return top + fy * (bottom - top);
+}
+
+inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double margin) {
+  return p.x() >= margin && p.y() >= margin && p.x() <= gray.cols - 1 - margin &&
+         p.y() <= gray.rows - 1 - margin;
+}
+
+// Steps 1-7 of the paper: convex, near-right-angled quadrilaterals, largest
+// perimeter first. Fills stats->contours and stats->candidates.
+std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParameters& p,
+                                       DetectorStats* stats);
+
+enum class EdgeFitStatus { kOk, kCutByImageBorder, kSideNotSupported, kFitFailed };
+
+struct EdgeFit {
+  EdgeFitStatus status = EdgeFitStatus::kFitFailed;
+  Quad corners_px;                              // refined, distorted pixels, same order as input
+  std::array<Eigen::Vector2d, 4> corners_norm;  // the same in the undistorted normalized plane
+  double residual_px = 0;                       // RMS of the edge samples about their lines
+};
+
+// Sub-pixel sides and corners from a candidate (stage 8).
+EdgeFit refine_quad(const cv::Mat& gray, const Camera& camera, const Quad& candidate,
+                    const DetectorParameters& p);
+
+struct Identification {
+  int id = -1;
+  int rotation = 0;
+  int bits_corrected = 0;
+  double contrast = 0;
+};
+
+// Reads the 6x6 grid through the homography of the refined corners (eq. 30)
+// and decodes it; std::nullopt when the contrast, the border or the code fails.
+std::optional<Identification> identify(const cv::Mat& gray, const Camera& camera,
+                                       const EdgeFit& fit, const Codebook& codebook,
+                                       const DetectorParameters& p);
+
+}  // namespace vision::detail

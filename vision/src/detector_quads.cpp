@@ -1,0 +1,90 @@
+// Quadrilateral candidates: the paper's detection steps 1-7 (Maidi et al.
+// 2010, §3): Canny, Gaussian smoothing of the edge map, dilation, contour
+// approximation proportional to the perimeter, four vertices, convexity and
+// near-right corner angles.
+#include <algorithm>
+#include <opencv2/imgproc.hpp>
+
+#include "detector_internal.hpp"
+
+namespace vision::detail {
+namespace {
+
+// Largest |cos| of the four corner angles of a quadrilateral.
+double max_abs_corner_cos(const Quad& q) {
+  double worst = 0;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d a = q[(i + 3) % 4] - q[i];
+    const Eigen::Vector2d b = q[(i + 1) % 4] - q[i];
+    worst = std::max(worst, std::abs(a.dot(b)) / (a.norm() * b.norm()));
+  }
+  return worst;
+}
+
+// Visually clockwise in the image (y down) <=> positive z of (q1-q0) x (q2-q1).
+void make_clockwise(Quad* q) {
+  double area2 = 0;
+  for (int i = 0; i < 4; ++i) {
+    const auto& a = (*q)[i];
+    const auto& b = (*q)[(i + 1) % 4];
+    area2 += a.x() * b.y() - b.x() * a.y();
+  }
+  if (area2 < 0) std::swap((*q)[1], (*q)[3]);
+}
+
+}  // namespace
+
+std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParameters& p,
+                                       DetectorStats* stats) {
+  // Step 1: edges. Canny's own 3x3 Sobel; the paper smooths after, not before.
+  cv::Mat edges;
+  cv::Canny(gray, edges, p.canny_low, p.canny_high, 3, false);
+  // Step 2: smoothing joins edge pixels a pixel apart (any non-zero pixel is
+  // edge for findContours). Step 3: dilation closes the remaining holes.
+  if (p.smoothing_kernel_px > 1)
+    cv::GaussianBlur(edges, edges, cv::Size(p.smoothing_kernel_px, p.smoothing_kernel_px), 0);
+  if (p.dilation_kernel_px > 1)
+    cv::dilate(edges, edges,
+               cv::getStructuringElement(cv::MORPH_RECT,
+                                         cv::Size(p.dilation_kernel_px, p.dilation_kernel_px)));
+
+  std::vector<std::vector<cv::Point>> contours;
+  cv::findContours(edges, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);
+  stats->contours = static_cast<int>(contours.size());
+
+  const double max_perimeter = p.max_perimeter_image_fraction * (gray.cols + gray.rows);
+  std::vector<std::pair<double, Quad>> found;
+  std::vector<cv::Point> approx;
+  for (const auto& contour : contours) {
+    if (contour.size() < 4) continue;
+    // Step 4: approximation tolerance proportional to the perimeter.
+    const double perimeter = cv::arcLength(contour, true);
+    if (perimeter < p.min_perimeter_px || perimeter > max_perimeter) continue;
+    cv::approxPolyDP(contour, approx, p.approx_epsilon_fraction * perimeter, true);
+    // Steps 5-6: four vertices bounding a convex region (four intersecting lines).
+    if (approx.size() != 4 || !cv::isContourConvex(approx)) continue;
+    Quad q;
+    for (int i = 0; i < 4; ++i)
+      q[i] = Eigen::Vector2d(approx[i].x, approx[i].y);
+    double shortest = 1e300;
+    for (int i = 0; i < 4; ++i)
+      shortest = std::min(shortest, (q[(i + 1) % 4] - q[i]).norm());
+    if (shortest < p.min_side_px) continue;
+    // Step 7: the cosines of the four angles near zero.
+    if (max_abs_corner_cos(q) > p.max_abs_cos_corner) continue;
+    make_clockwise(&q);
+    found.emplace_back(perimeter, q);
+  }
+  // Largest first: a marker's outer outline comes before the contours inside
+  // it (its inner rim, its code cells), which the detector then skips.
+  std::stable_sort(found.begin(), found.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::vector<Quad> quads;
+  quads.reserve(found.size());
+  for (const auto& f : found)
+    quads.push_back(f.second);
+  stats->candidates = static_cast<int>(quads.size());
+  return quads;
+}
+
+}  // namespace vision::detail
