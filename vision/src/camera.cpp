@@ -19,7 +19,8 @@ std::string lower_extension(const std::string& path) {
   const auto dot = path.find_last_of('.');
   if (dot == std::string::npos) return "";
   std::string ext = path.substr(dot + 1);
-  for (auto& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (auto& c : ext)
+    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
 
@@ -57,19 +58,21 @@ std::vector<double> read_matrix(const cv::FileNode& root, const std::string& pat
     *cols = m.cols;
     values.assign(m.begin<double>(), m.end<double>());
   } else if (n.isMap() && !n["data"].empty()) {
-    if (!n["rows"].isInt() || !n["cols"].isInt()) fail(path, key, "must give integer rows and cols");
+    if (!n["rows"].isInt() || !n["cols"].isInt())
+      fail(path, key, "must give integer rows and cols");
     *rows = static_cast<int>(n["rows"]);
     *cols = static_cast<int>(n["cols"]);
     const cv::FileNode data = n["data"];
     if (!data.isSeq()) fail(path, key, "data must be a sequence of numbers");
     for (const auto& item : data) {
-      if (!item.isReal() && !item.isInt()) fail(path, key, "data holds a value that is not a number");
+      if (!item.isReal() && !item.isInt())
+        fail(path, key, "data holds a value that is not a number");
       values.push_back(static_cast<double>(item));
     }
     if (static_cast<int>(values.size()) != *rows * *cols)
       fail(path, key,
-           "has " + std::to_string(values.size()) + " values but rows x cols = " +
-               std::to_string(*rows) + "x" + std::to_string(*cols));
+           "has " + std::to_string(values.size()) +
+               " values but rows x cols = " + std::to_string(*rows) + "x" + std::to_string(*cols));
   } else if (n.isSeq()) {
     for (const auto& item : n) {
       if (!item.isReal() && !item.isInt()) fail(path, key, "holds a value that is not a number");
@@ -92,7 +95,8 @@ Camera::Camera(const Intrinsics& intrinsics, const Distortion& distortion, int w
     : intrinsics_(intrinsics), distortion_(distortion), width_px_(width_px), height_px_(height_px) {
   if (!finite_all({intrinsics.fx, intrinsics.fy, intrinsics.cx, intrinsics.cy}) ||
       intrinsics.fx <= 0 || intrinsics.fy <= 0)
-    throw std::invalid_argument("camera intrinsics: fx and fy must be finite and > 0, cx and cy finite");
+    throw std::invalid_argument(
+        "camera intrinsics: fx and fy must be finite and > 0, cx and cy finite");
   if (!finite_all({distortion.k1, distortion.k2, distortion.p1, distortion.p2, distortion.k3}))
     throw std::invalid_argument("camera distortion: every coefficient must be finite");
   if (width_px <= 0 || height_px <= 0)
@@ -128,8 +132,8 @@ Camera Camera::load(const std::string& path) {
   try {
     fs.open(text, flags);
   } catch (const cv::Exception& e) {
-    throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration: " +
-                           e.what());
+    throw CalibrationError("calibration file '" + path +
+                           "': not a YAML/XML calibration: " + e.what());
   }
   if (!fs.isOpened())
     throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration");
@@ -254,7 +258,8 @@ bool Camera::undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) 
 std::vector<Eigen::Vector2d> Camera::undistort_points(
     const std::vector<Eigen::Vector2d>& pixels) const {
   std::vector<Eigen::Vector2d> out(pixels.size());
-  for (size_t i = 0; i < pixels.size(); ++i) undistort_point(pixels[i], &out[i]);
+  for (size_t i = 0; i < pixels.size(); ++i)
+    undistort_point(pixels[i], &out[i]);
   return out;
 }
 

@@ -56,7 +56,8 @@ Correspondences make_correspondences(const Camera& camera,
 
   // Extent, duplicates and the plane, from the SVD of the centred points.
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : object_points) centroid += p;
+  for (const auto& p : object_points)
+    centroid += p;
   centroid /= static_cast<double>(n);
   Eigen::MatrixXd centred(n, 3);
   double extent = 0;
@@ -84,7 +85,8 @@ Correspondences make_correspondences(const Camera& camera,
                      std::to_string(sv(2) / sv(0)) + " of the in-plane extent; expected < 1e-6)");
 
   bool on_z0 = true;
-  for (const auto& p : object_points) on_z0 = on_z0 && std::abs(p.z()) <= 1e-12 * extent;
+  for (const auto& p : object_points)
+    on_z0 = on_z0 && std::abs(p.z()) <= 1e-12 * extent;
   if (!on_z0) {
     Eigen::Matrix3d R = svd.matrixV();
     if (R.determinant() < 0) R.col(2) *= -1;
@@ -92,7 +94,8 @@ Correspondences make_correspondences(const Camera& camera,
   }
   const Pose T_plane_target = c.T_target_plane.inverse();
   c.plane_points.reserve(n);
-  for (const auto& p : object_points) c.plane_points.push_back((T_plane_target * p).head<2>());
+  for (const auto& p : object_points)
+    c.plane_points.push_back((T_plane_target * p).head<2>());
 
   c.normalized = camera.undistort_points(image_points_px);
   for (size_t i = 0; i < n; ++i)

@@ -7,22 +7,31 @@ namespace vision {
 
 const char* to_string(Termination t) {
   switch (t) {
-    case Termination::kConverged: return "converged";
-    case Termination::kClosedForm: return "closed_form";
-    case Termination::kMaxIterations: return "max_iterations";
-    case Termination::kNotApplicable: return "not_applicable";
-    case Termination::kDegenerate: return "degenerate";
-    case Termination::kBehindCamera: return "behind_camera";
-    case Termination::kNumericalFailure: return "numerical_failure";
+    case Termination::kConverged:
+      return "converged";
+    case Termination::kClosedForm:
+      return "closed_form";
+    case Termination::kMaxIterations:
+      return "max_iterations";
+    case Termination::kNotApplicable:
+      return "not_applicable";
+    case Termination::kDegenerate:
+      return "degenerate";
+    case Termination::kBehindCamera:
+      return "behind_camera";
+    case Termination::kLocalMinimum:
+      return "local_minimum";
+    case Termination::kNumericalFailure:
+      return "numerical_failure";
   }
   return "unknown";
 }
 
-Estimate not_applicable(const std::string& why) {
+Estimate unsolved(Termination why, const std::string& message) {
   Estimate e;
-  e.termination = Termination::kNotApplicable;
+  e.termination = why;
   e.converged = false;
-  e.message = why;
+  e.message = message;
   return e;
 }
 
@@ -38,9 +47,9 @@ Estimate PoseSolver::solve(const Correspondences& c, const SolverHint& hint) con
   const bool finite = T.R.allFinite() && T.t.allFinite();
   // A rotation that drifted from orthonormal by more than 1e-6 is a solver
   // bug or a numerical breakdown, not a pose.
-  const bool orthonormal =
-      finite && (T.R.transpose() * T.R - Eigen::Matrix3d::Identity()).norm() < 1e-6 &&
-      T.R.determinant() > 0;
+  const bool orthonormal = finite &&
+                           (T.R.transpose() * T.R - Eigen::Matrix3d::Identity()).norm() < 1e-6 &&
+                           T.R.determinant() > 0;
   if (!finite || !orthonormal) {
     e.converged = false;
     e.termination = Termination::kNumericalFailure;

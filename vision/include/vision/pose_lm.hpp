@@ -5,7 +5,8 @@
 //
 // Parameters: a rotation increment (axis-angle, left-multiplied) and the
 // translation. Started from the best (lowest reprojection error) of the
-// solvers that can start it: ippe's two solutions and hybrid_oi's, and the hint.
+// solvers that can start it: IPPE's better solution (both when they are nearly
+// ambiguous), the hint, and hybrid_oi's when IPPE fails.
 #pragma once
 
 #include "vision/pose_solver.hpp"
@@ -17,8 +18,8 @@ struct LmOptions {
   int max_iterations = 100;
   // Stop when the relative decrease of the squared error, or the step size
   // (radians / metres), falls below these. Smaller: closer to the optimum.
-  double relative_tolerance = 1e-14;
-  double step_tolerance = 1e-12;
+  double relative_tolerance = 1e-10;
+  double step_tolerance = 1e-9;
 };
 
 class LmSolver : public PoseSolver {

@@ -3,9 +3,10 @@
 //                       square centred on the origin: applied only to those)
 //   opencv_iterative    SOLVEPNP_ITERATIVE (homography start, then LM)
 //   opencv_sqpnp        SOLVEPNP_SQPNP (Terzakis & Lourakis 2020)
-// They are given the raw distorted pixels with the camera's distortion, as a
-// user of OpenCV would call them. converged is solvePnP's return value: OpenCV
-// reports no more than that.
+// They are given the pixels undistorted once by our camera model (and no
+// distortion coefficients), like every other solver: cv::undistortPoints' fixed
+// five iterations would otherwise add up to 1e-4 px of error near the image
+// corners. converged is solvePnP's return value: OpenCV reports no more.
 #pragma once
 
 #include "vision/pose_solver.hpp"

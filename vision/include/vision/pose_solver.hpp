@@ -26,20 +26,21 @@ enum class Termination {
   kNotApplicable,     // the input is not of the kind the solver handles
   kDegenerate,        // the geometry gives no unique pose (e.g. a singular system)
   kBehindCamera,      // the result puts an object point on or behind the camera
+  kLocalMinimum,      // stopped, but the residual is inconsistent with the noise
   kNumericalFailure,  // NaN or infinity appeared
 };
 const char* to_string(Termination t);
 
 struct Estimate {
   std::string solver;
-  Pose T_cam_target;                    // object (target frame) to camera, metres
-  double distance_m = 0;                // |t|: camera centre to target-frame origin, metres
-  double reprojection_error_px = 0;     // RMS over all points, full camera model, pixels
-  int iterations = 0;                   // 0 for closed-form solvers
-  bool converged = false;               // true only for a finite, usable pose
+  Pose T_cam_target;                 // object (target frame) to camera, metres
+  double distance_m = 0;             // |t|: camera centre to target-frame origin, metres
+  double reprojection_error_px = 0;  // RMS over all points, full camera model, pixels
+  int iterations = 0;                // 0 for closed-form solvers
+  bool converged = false;            // true only for a finite, usable pose
   Termination termination = Termination::kNumericalFailure;
-  std::string message;                  // detail on termination, for people
-  double time_us = 0;                   // wall time of solve(), microseconds
+  std::string message;  // detail on termination, for people
+  double time_us = 0;   // wall time of solve(), microseconds
   // IPPE-family only: reprojection error of the better of the two planar
   // solutions over that of the worse, in [0, 1]. Near 1 the two poses explain
   // the image equally well (planar ambiguity, Collins & Bartoli 2014 §5).
@@ -77,7 +78,8 @@ class PoseSolver {
   virtual Estimate solve_pose(const Correspondences& c, const SolverHint& hint) const = 0;
 };
 
-// An Estimate for input a solver does not handle.
-Estimate not_applicable(const std::string& why);
+// An Estimate with no pose: converged = false, the given termination (not
+// kConverged or kClosedForm) and a message for people.
+Estimate unsolved(Termination why, const std::string& message);
 
 }  // namespace vision

@@ -1,0 +1,185 @@
+#include "vision/pose_ekf.hpp"
+
+#include <Eigen/Cholesky>
+#include <cmath>
+
+#include "vision/pose_analytic.hpp"
+
+namespace vision {
+namespace {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+Pose pose_from_state(const Vector6d& x) {
+  return {rotation_from_euler_zyx(x(0), x(1), x(2)), x.tail<3>()};
+}
+
+Vector6d state_from_pose(const Pose& T) {
+  Vector6d x;
+  x << euler_zyx_from_rotation(T.R), T.t;
+  return x;
+}
+
+// The difference of two states with the angles wrapped to (-pi, pi], so that a
+// prior at psi = pi and a state at -pi are not 2 pi apart.
+Vector6d state_difference(const Vector6d& a, const Vector6d& b) {
+  Vector6d d = a - b;
+  for (int k = 0; k < 3; ++k)
+    d(k) = std::remainder(d(k), 2.0 * M_PI);
+  return d;
+}
+
+// Eqs. 15-17 and 29: the measurement residual z - h(x) (undistorted pixels)
+// and its Jacobian H = dh/dx, accumulated straight into H^T H and H^T r (the
+// only products the update needs). With R = Rz(psi) Ry(theta) Rx(phi):
+// dR/dpsi P = e_z x (R P), dR/dtheta P = Rz (e_y x (Ry Rx P)), dR/dphi P = R (e_x x P).
+// Returns false when a point is on or behind the camera.
+bool measurement(const Correspondences& c, const Vector6d& x, Matrix6d* HtH, Vector6d* Htr,
+                 double* residual_squared) {
+  const Intrinsics& k = c.camera->intrinsics();
+  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(x(0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(x(1), Eigen::Vector3d::UnitY()).toRotationMatrix();
+  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(x(2), Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const Eigen::Matrix3d RyRx = Ry * Rx;
+  const Eigen::Matrix3d R = Rz * RyRx;
+  HtH->setZero();
+  Htr->setZero();
+  *residual_squared = 0;
+  for (size_t i = 0; i < c.size(); ++i) {
+    const Eigen::Vector3d& P = c.object_points[i];
+    const Eigen::Vector3d RP = R * P;
+    const Eigen::Vector3d p = RP + x.tail<3>();
+    if (!(p.z() > 0)) return false;
+    const double inv_z = 1.0 / p.z();
+    // Observed undistorted pixel minus predicted pixel.
+    const Eigen::Vector2d r(k.fx * (c.normalized[i].x() - p.x() * inv_z),
+                            k.fy * (c.normalized[i].y() - p.y() * inv_z));
+    Eigen::Matrix<double, 2, 3> dh_dp;
+    dh_dp << k.fx * inv_z, 0, -k.fx * p.x() * inv_z * inv_z, 0, k.fy * inv_z,
+        -k.fy * p.y() * inv_z * inv_z;
+    Eigen::Matrix3d dp_dangles;
+    dp_dangles.col(0) = Eigen::Vector3d::UnitZ().cross(RP);
+    dp_dangles.col(1) = Rz * Eigen::Vector3d::UnitY().cross(RyRx * P);
+    dp_dangles.col(2) = R * Eigen::Vector3d::UnitX().cross(P);
+    Eigen::Matrix<double, 2, 6> H;
+    H.leftCols<3>() = dh_dp * dp_dangles;
+    H.rightCols<3>() = dh_dp;
+    *HtH += H.transpose() * H;
+    *Htr += H.transpose() * r;
+    *residual_squared += r.squaredNorm();
+  }
+  return true;
+}
+
+Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
+  Vector6d d;
+  d << Eigen::Vector3d::Constant(sigma_angle * sigma_angle),
+      Eigen::Vector3d::Constant(sigma_translation * sigma_translation);
+  return d.asDiagonal();
+}
+
+}  // namespace
+
+Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
+                      const EkfOptions& options) {
+  // Measurement update (eqs. 25-28), relinearised about the current state until
+  // it stops moving. Written in information form, which gives the same state
+  // and covariance as the gain form (K = P H^T (H P H^T + R)^-1) while inverting
+  // a 6x6 matrix instead of a 2N x 2N one:
+  //   P+ = (P^-1 + H^T R^-1 H)^-1,
+  //   x_{i+1} = x_i + P+ (H^T R^-1 (z - h(x_i)) - P^-1 (x_i - x_prior)).
+  const Vector6d x_prior = state_from_pose(prior);
+  const Eigen::LDLT<Matrix6d> prior_ldlt(prior_covariance);
+  const Matrix6d prior_information = prior_ldlt.solve(Matrix6d::Identity());
+  const double inv_r = 1.0 / (options.measurement_sigma_px * options.measurement_sigma_px);
+
+  Estimate e;
+  Vector6d x = x_prior;
+  Matrix6d HtH, information = prior_information;
+  Vector6d Htr;
+  double residual_squared = 0;
+  e.termination = Termination::kMaxIterations;
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    e.iterations = it;
+    if (!measurement(c, x, &HtH, &Htr, &residual_squared)) {
+      e.termination = Termination::kBehindCamera;
+      e.message = "the filter state put an object point behind the camera";
+      break;
+    }
+    information = prior_information + inv_r * HtH;
+    const Vector6d gradient = inv_r * Htr - prior_information * state_difference(x, x_prior);
+    const Vector6d step = information.ldlt().solve(gradient);
+    if (!step.allFinite()) {
+      e.termination = Termination::kNumericalFailure;
+      e.message = "the measurement update is singular";
+      break;
+    }
+    x += step;
+    if (step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
+      e.termination = Termination::kConverged;
+      break;
+    }
+  }
+  e.T_cam_target = pose_from_state(x);
+  e.covariance = information.ldlt().solve(Matrix6d::Identity());
+  if (e.termination == Termination::kConverged) {
+    // Consistency gate: a state that explains the corners far worse than the
+    // measurement noise allows is a wrong local minimum, not a pose.
+    measurement(c, x, &HtH, &Htr, &residual_squared);
+    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(c.size())));
+    if (rms > options.gate_sigmas * options.measurement_sigma_px) {
+      e.message = "converged to a state whose residual (" + std::to_string(rms) +
+                  " px RMS per coordinate) exceeds the gate of " +
+                  std::to_string(options.gate_sigmas) + " measurement sigmas: a local minimum";
+      e.termination = Termination::kLocalMinimum;
+      e.converged = false;
+      return e;
+    }
+    e.converged = true;
+  } else if (e.termination == Termination::kMaxIterations) {
+    e.message = "the state was still moving after " + std::to_string(options.max_iterations) +
+                " iterations";
+  }
+  return e;
+}
+
+namespace {
+
+// Prior from a carried state: the time update of eqs. 18-20 (A = I, P += Q).
+Matrix6d carried_covariance(const SolverHint& hint, const EkfOptions& o) {
+  const Matrix6d Q = diagonal_covariance(o.process_sigma_angle_rad, o.process_sigma_translation_m);
+  return hint.covariance
+             ? Matrix6d(*hint.covariance + Q)
+             : diagonal_covariance(o.prior_sigma_angle_rad, o.prior_sigma_translation_m);
+}
+
+}  // namespace
+
+Estimate EkfSolver::solve_pose(const Correspondences& c, const SolverHint& hint) const {
+  if (hint.T_cam_target)
+    return iterated_ekf(c, *hint.T_cam_target, carried_covariance(hint, options_), options_);
+  const Pose nominal{Eigen::Matrix3d::Identity(), Eigen::Vector3d(0, 0, options_.prior_depth_m)};
+  return iterated_ekf(
+      c, nominal,
+      diagonal_covariance(options_.prior_sigma_angle_rad, options_.prior_sigma_translation_m),
+      options_);
+}
+
+Estimate HybridEkfSolver::solve_pose(const Correspondences& c, const SolverHint& hint) const {
+  if (hint.T_cam_target)
+    return iterated_ekf(c, *hint.T_cam_target, carried_covariance(hint, options_), options_);
+  if (!c.square_side_m)
+    return unsolved(Termination::kNotApplicable,
+                    "hybrid_ekf starts from the analytic pose of a square: the first four object "
+                    "points are not a square A, B, C, D");
+  Pose start;
+  std::string why;
+  if (!analytic_square_pose(c, &start, &why))
+    return unsolved(Termination::kDegenerate, "analytic start failed: " + why);
+  return iterated_ekf(
+      c, start,
+      diagonal_covariance(options_.prior_sigma_angle_rad, options_.prior_sigma_translation_m),
+      options_);
+}
+
+}  // namespace vision
