@@ -48,10 +48,10 @@ ModbusBench::ModbusBench(const BenchUrl& url, DriveProfile profile)
     feedback_first_ = first;
     feedback_count_ = last - first + 1;
   }
-  reconnect("connect");
+  reconnect("connect", /*first=*/true);
 }
 
-void ModbusBench::reconnect(const char* what) {
+void ModbusBench::reconnect(const char* what, bool first) {
   const auto deadline = Clock::now() + milliseconds(profile_.timing.reconnect_timeout_ms);
   milliseconds backoff = kBackoffFirst;
   int err = 0;
@@ -60,7 +60,14 @@ void ModbusBench::reconnect(const char* what) {
     BenchStatus s;
     if (err == 0) err = read_feedback(s);
     if (err == 0) {
-      check_state_after_reconnect(s);
+      // The first connection only learns the state (an alarm is for the
+      // caller to see and reset); a reconnect checks it against what was
+      // commanded.
+      if (first) {
+        homed_seen_ = s.homed;
+      } else {
+        check_state_after_reconnect(s);
+      }
       return;
     }
     if (!ModbusLink::is_link_error(err)) {
@@ -117,7 +124,7 @@ template <class Op>
 int ModbusBench::transact(const char* what, Op op) {
   for (int attempt = 1;; ++attempt) {
     if (!link_.connected()) {
-      reconnect(what);
+      reconnect(what, /*first=*/false);
       ++reconnects_;
       spdlog::warn("bench {}: link re-established during {}; state re-read, resuming",
                    link_.url().str(), what);

@@ -22,4 +22,9 @@ struct ExitStatus {
 // rig capture --camera SPEC --frames N --out DIR (cmd_capture.cpp).
 void add_capture_command(CLI::App& app, ExitStatus& status);
 
+// rig bench status|home|move|jog|stop|reset (cmd_bench.cpp).
+void add_bench_command(CLI::App& app, ExitStatus& status);
+// rig sim bench (cmd_sim.cpp).
+void add_sim_command(CLI::App& app, ExitStatus& status);
+
 }  // namespace rig

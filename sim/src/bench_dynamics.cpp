@@ -62,19 +62,31 @@ void BenchDynamics::step(Axis& a, double h) {
   const double acc = a.cfg.accel_mm_s2;
   const double d = a.target - a.motor;
   const double dir = d >= 0 ? 1.0 : -1.0;
-  // The fastest speed from which the axis can still stop on the target:
-  // v = sqrt(2 a |d|) (the deceleration ramp of the trapezoid).
-  const double desired = dir * std::min(a.vmax, std::sqrt(2 * acc * std::fabs(d)));
-  a.v += std::clamp(desired - a.v, -acc * h, acc * h);
-  const double next = a.motor + a.v * h;
-  const bool crosses = (a.target - next) * d <= 0;
-  if (crosses && std::fabs(a.v) <= std::sqrt(2 * acc * std::fabs(d)) + acc * h) {
-    a.motor = a.target;
-    a.v = 0;
-    a.moving = false;
-    a.error = a.cfg.repeatability_mm * normal_(rng_);
+  const double dist = std::fabs(d);
+  const double v_toward = a.v * dir;  // speed towards the target (< 0: moving away)
+  // Speed from which the axis stops exactly on the target at full
+  // deceleration: the braking branch of the trapezoid, v = sqrt(2 a d).
+  const double v_brake = std::sqrt(2 * acc * dist);
+  if (v_toward > 0 && v_toward >= v_brake - acc * h) {
+    // Braking: follow the parabola exactly. With d' = -sqrt(2 a d),
+    // sqrt(d) falls linearly at sqrt(a/2) per second.
+    const double root = std::sqrt(dist) - std::sqrt(acc / 2) * h;
+    if (root <= 0) {
+      a.motor = a.target;
+      a.v = 0;
+      a.moving = false;
+      a.error = a.cfg.repeatability_mm * normal_(rng_);
+    } else {
+      a.motor = a.target - dir * root * root;
+      a.v = dir * std::sqrt(2 * acc) * root;
+    }
   } else {
-    a.motor = next;
+    // Accelerating towards the cruise speed (or turning round): constant
+    // acceleration over the step, integrated exactly.
+    const double desired = dir * std::min(a.vmax, v_brake);
+    const double v0 = a.v;
+    a.v += std::clamp(desired - a.v, -acc * h, acc * h);
+    a.motor += (v0 + a.v) / 2 * h;
   }
   const double half = a.cfg.backlash_mm / 2;
   if (a.motor - a.carriage > half) a.carriage = a.motor - half;

@@ -332,7 +332,12 @@ void BenchServer::apply_write(int first, int count) {
   auto touches = [&](int address, int n) { return first < address + n && address < first + count; };
   const double x_mm = profile_.to_mm(motion::decode_int32(regs + r.target_x, profile_.word_order));
   const double y_mm = profile_.to_mm(motion::decode_int32(regs + r.target_y, profile_.word_order));
-  if (touches(r.target_x, 2) || touches(r.target_y, 2)) written_.push_back({x_mm, y_mm});
+  if (touches(r.target_x, 2) || touches(r.target_y, 2)) {
+    WrittenTarget w;
+    if (touches(r.target_x, 2)) w.x_mm = x_mm;
+    if (touches(r.target_y, 2)) w.y_mm = y_mm;
+    written_.push_back(w);
+  }
   if (!touches(r.command, 1)) return;
   const std::uint16_t code = regs[r.command];
   const motion::CommandCodes& c = profile_.commands;
@@ -359,7 +364,7 @@ motion::XY BenchServer::encoder_position_mm() const {
   return {dynamics_.encoder_x_mm(), dynamics_.encoder_y_mm()};
 }
 
-std::vector<motion::XY> BenchServer::written_targets() const {
+std::vector<BenchServer::WrittenTarget> BenchServer::written_targets() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return written_;
 }

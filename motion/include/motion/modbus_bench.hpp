@@ -65,7 +65,9 @@ class ModbusBench : public Bench {
   // again, at most a few times. A Modbus exception response is returned.
   template <class Op>
   int transact(const char* what, Op op);
-  void reconnect(const char* what);
+  // Connects with backoff until the profile's reconnect timeout, then reads
+  // the state; unless `first`, checks it against what was commanded.
+  void reconnect(const char* what, bool first);
   void check_state_after_reconnect(const BenchStatus& s);
   int read_feedback(BenchStatus& out);
   int read_targets(std::array<std::int32_t, 2>& counts);

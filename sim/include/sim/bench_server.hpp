@@ -25,6 +25,7 @@
 #include <motion/bench.hpp>
 #include <motion/drive_profile.hpp>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -71,8 +72,12 @@ class BenchServer {
   motion::XY actual_position_mm() const;
   // What the encoder reads, mm (quantized): the value served to clients.
   motion::XY encoder_position_mm() const;
-  // Every target (x, y) ever written to the target registers, decoded, mm.
-  std::vector<motion::XY> written_targets() const;
+  // Every write that touched the target registers, decoded, mm; an axis
+  // whose registers the write did not touch is empty.
+  struct WrittenTarget {
+    std::optional<double> x_mm, y_mm;
+  };
+  std::vector<WrittenTarget> written_targets() const;
   std::uint64_t requests() const;
 
   // Replaces the fault plan; its counters start now.
@@ -99,7 +104,7 @@ class BenchServer {
   BenchDynamics dynamics_;
   FaultPlan faults_;
   std::uint64_t requests_ = 0;
-  std::vector<motion::XY> written_;
+  std::vector<WrittenTarget> written_;
 
   // Network thread only.
   modbus_t* ctx_ = nullptr;
