@@ -19,6 +19,11 @@ struct ExitStatus {
   int code = kExitOk;
 };
 
+// rig marker --id N --size-mm 50 --out FILE (cmd_marker.cpp).
+void add_marker_command(CLI::App& app, ExitStatus& status);
+// rig target --target FILE --out FILE (cmd_target.cpp).
+void add_target_command(CLI::App& app, ExitStatus& status);
+
 // rig capture --camera SPEC --frames N --out DIR (cmd_capture.cpp).
 void add_capture_command(CLI::App& app, ExitStatus& status);
 

@@ -11,6 +11,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   rig::ExitStatus status;
   rig::add_capture_command(app, status);
+  rig::add_marker_command(app, status);
+  rig::add_target_command(app, status);
   rig::add_bench_command(app, status);
   rig::add_sim_command(app, status);
   try {

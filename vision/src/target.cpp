@@ -112,8 +112,9 @@ Target Target::load(const std::string& toml_path) {
     root = toml::parse_file(toml_path);
   } catch (const toml::parse_error& e) {
     std::ostringstream s;
-    s << toml_path << ": not a readable TOML layout file (" << e.description() << " at line "
-      << e.source().begin.line << ")";
+    s << toml_path << ": not a readable TOML layout file (" << e.description();
+    if (e.source().begin.line > 0) s << " at line " << e.source().begin.line;
+    s << ")";
     throw TargetError(s.str());
   }
   const std::string& f = toml_path;
