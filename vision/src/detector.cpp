@@ -47,6 +47,8 @@ void validate(const DetectorParameters& p) {
   require(p.cell_sample_fraction > 0 && p.cell_sample_fraction <= 1, "cell_sample_fraction",
           "in (0, 1]");
   require(p.min_contrast >= 0, "min_contrast", ">= 0");
+  require(p.min_quiet_zone_level >= 0 && p.min_quiet_zone_level <= 1, "min_quiet_zone_level",
+          "in [0, 1]");
   require(p.min_cell_margin >= 0 && p.min_cell_margin < 0.5, "min_cell_margin", "in [0, 0.5)");
   require(p.max_border_errors >= 0, "max_border_errors", ">= 0");
   require(p.max_bits_corrected >= -1, "max_bits_corrected", ">= -1");

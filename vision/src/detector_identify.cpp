@@ -103,6 +103,26 @@ std::optional<Identification> identify(const cv::Mat& gray, const Camera& camera
   Identification id;
   id.contrast = white - black;
   if (id.contrast < p.min_contrast) return std::nullopt;
+
+  // The quiet zone must be white all round, and right up to each corner: an
+  // occluder that only grazes a corner leaves the sides' edges intact but
+  // darkens (or, if grey, fails to whiten) the paper beside the corner.
+  const double min_white = black + p.min_quiet_zone_level * id.contrast;
+  for (double v : outside)
+    if (v < min_white) return std::nullopt;
+  constexpr double kAcross = 0.35, kAlong = 0.3;  // cells, inside the one-cell quiet zone
+  for (const auto& corner :
+       {Eigen::Vector2d(0, 0), Eigen::Vector2d(kMarkerCells, 0),
+        Eigen::Vector2d(kMarkerCells, kMarkerCells), Eigen::Vector2d(0, kMarkerCells)}) {
+    const double su = corner.x() > 0 ? 1 : -1, sv = corner.y() > 0 ? 1 : -1;  // outward
+    for (const auto& probe :
+         {Eigen::Vector2d(corner.x() + su * kAcross, corner.y() + sv * kAcross),
+          Eigen::Vector2d(corner.x() + su * kAcross, corner.y() - sv * kAlong),
+          Eigen::Vector2d(corner.x() - su * kAlong, corner.y() + sv * kAcross)}) {
+      double v;
+      if (grid.mean(probe.x(), probe.y(), 0.2, &v) && v < min_white) return std::nullopt;
+    }
+  }
   const double threshold = 0.5 * (white + black);
   const double margin = p.min_cell_margin * id.contrast;
 

@@ -138,9 +138,13 @@ struct DetectorParameters {
 
   // A sample counts as an edge when its outward dark-to-bright step is at
   // least this fraction of the side's typical (75th percentile) step, and at
-  // least min_edge_step grey levels per pixel. The relative bound is what
-  // detects an occluder: where it covers the side the step vanishes.
-  double min_relative_edge_step = 0.4;
+  // least min_edge_step grey levels. The relative bound is what detects an
+  // occluder: where it covers the side the step vanishes, or shrinks to the
+  // step between the black border and a grey occluder. Along one side the
+  // step varies by a few percent (lighting gradient, vignetting); higher
+  // values catch paler occluders but would start to reject sides that run
+  // across a strong lighting change.
+  double min_relative_edge_step = 0.75;
   double min_edge_step = 4.0;
 
   // Occlusion: the fraction of a side's samples that must be edge samples on
@@ -186,6 +190,14 @@ struct DetectorParameters {
   // and its black border. Lower finds markers in dim or foggy images, at a
   // higher risk of reading noise as a code.
   double min_contrast = 20;
+
+  // Every sample of the quiet zone (half a cell outside each side, and
+  // beside each corner) must reach black + this fraction of the contrast.
+  // This rejects markers whose outline an occluder grazes near a corner, and
+  // grey occluders lying on the quiet zone, which the side fit alone may
+  // accept. Higher rejects more of those, but also markers under a strong
+  // lighting gradient or vignetting across their surround.
+  double min_quiet_zone_level = 0.7;
 
   // A cell is "uncertain" when its mean is within this fraction of the
   // contrast of the black/white threshold. Each uncertain code cell counts

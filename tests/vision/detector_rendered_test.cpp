@@ -1,0 +1,204 @@
+// The detector on frames of sim::SceneRenderer (issue 3, §6): the paper's
+// camera (736x571, its intrinsics and distortion) and sheet (5 cm markers),
+// the pose marker at 0.10-1.00 m anywhere in the image, tilt up to 40 degrees,
+// the renderer's realistic optics and sensor (blur 0.6 px, vignetting,
+// lighting gradient, shot and read noise, 8-bit quantization).
+//
+// Each test renders its own frames (ctest runs every test in its own process,
+// so nothing is shared); frame counts keep the whole file near 40 s of CPU.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "detector_frames.hpp"
+#include "sim/scene_renderer.hpp"
+#include "vision/detector.hpp"
+
+namespace {
+
+using detector_test::corner_rms;
+using detector_test::distance_class;
+
+// A marker "should be detected" when the renderer says its whole outline is
+// visible and the outline keeps this far from the image border: the detector
+// reads the edge profile up to edge_search_px + 1 px (6 px) outside the
+// outline, so nearer the border the edge cannot be measured on both sides.
+constexpr double kDetectableBorderPx = 8.0;
+
+struct Tally {
+  int detectable = 0;  // fully visible, kDetectableBorderPx from the border
+  int found = 0;       // of those, detected with the right id
+  int cut = 0;         // truth markers cut by the image border (not occluded)
+  int cut_detected = 0;
+  int occluded = 0;  // truth markers an occluder covers or comes within 3 sigma + 1 px of
+  int occluded_detected = 0;
+  double occluded_worst_rms = 0;  // over the occluded markers that were detected
+  int false_detections = 0;       // a detection no visible marker explains
+  double sum_sq[3] = {0, 0, 0};
+  int corners[3] = {0, 0, 0};  // detections per distance class
+  double worst_rms = 0;
+};
+
+// A detection "explains" a truth marker when the ids agree and the corners
+// lie within 2 px (RMS): far above any sub-pixel error, far below a marker.
+void tally_frame(const sim::RenderedFrame& frame, const vision::Pose& T,
+                 const vision::Target& target, const std::vector<vision::Detection>& detections,
+                 Tally* t) {
+  std::vector<bool> explained(detections.size(), false);
+  for (const auto& truth : frame.markers) {
+    const auto& m = target.marker(truth.id);
+    const double distance = (T * Eigen::Vector3d(m.centre_m.x(), m.centre_m.y(), 0)).norm();
+    int hit = -1;
+    for (size_t k = 0; k < detections.size(); ++k)
+      if (detections[k].id == truth.id &&
+          corner_rms(detections[k].corners_px, truth.corners_px) < 2)
+        hit = static_cast<int>(k);
+    if (!truth.fully_visible) {
+      // A detection of the id elsewhere is a false detection (counted below).
+      if (truth.occluded) {
+        ++t->occluded;
+        if (hit >= 0) {
+          ++t->occluded_detected;
+          t->occluded_worst_rms = std::max(
+              t->occluded_worst_rms, corner_rms(detections[hit].corners_px, truth.corners_px));
+        }
+      } else {
+        ++t->cut;
+        if (hit >= 0) ++t->cut_detected;
+      }
+      continue;
+    }
+    if (truth.border_distance_px >= kDetectableBorderPx) ++t->detectable;
+    if (hit < 0) continue;
+    explained[hit] = true;
+    if (truth.border_distance_px >= kDetectableBorderPx) ++t->found;
+    const double rms = corner_rms(detections[hit].corners_px, truth.corners_px);
+    const int c = distance_class(distance);
+    t->sum_sq[c] += rms * rms;
+    ++t->corners[c];
+    t->worst_rms = std::max(t->worst_rms, rms);
+  }
+  for (size_t k = 0; k < detections.size(); ++k)
+    if (!explained[k]) {
+      bool cut_marker = false;  // a detection of a cut marker is counted above
+      for (const auto& truth : frame.markers)
+        cut_marker = cut_marker || (!truth.fully_visible && truth.id == detections[k].id &&
+                                    corner_rms(detections[k].corners_px, truth.corners_px) < 2);
+      if (!cut_marker) ++t->false_detections;
+    }
+}
+
+class DetectorRendered : public ::testing::Test {
+ protected:
+  DetectorRendered()
+      : camera_(vision::Camera::paper_default()),
+        target_(vision::Target::paper_default()),
+        detector_(camera_, codebook_) {}
+
+  Tally run(const sim::SceneOptions& options, int frames, uint64_t seed) const {
+    const sim::SceneRenderer renderer(camera_, target_, codebook_, options);
+    const auto poses = detector_test::sample_poses(camera_, frames, seed);
+    Tally t;
+    for (int i = 0; i < frames; ++i) {
+      const sim::RenderedFrame frame = renderer.render(poses[i], seed * 100000 + i);
+      tally_frame(frame, poses[i], target_, detector_.detect(frame.image), &t);
+    }
+    return t;
+  }
+
+  vision::Camera camera_;
+  vision::Target target_;
+  vision::Codebook codebook_;
+  vision::Detector detector_;
+};
+
+// Issue 3 §6: detection rate >= 99.5 %. 500 frames hold ~1,400 detectable
+// markers, so the bound allows 7 misses.
+TEST_F(DetectorRendered, DetectsAtLeast99Point5PercentOfVisibleMarkers) {
+  const Tally t = run(sim::SceneOptions{}, 500, 11);
+  ASSERT_GT(t.detectable, 1000);
+  const double rate = static_cast<double>(t.found) / t.detectable;
+  RecordProperty("detectable", t.detectable);
+  RecordProperty("detection_rate", std::to_string(rate));
+  EXPECT_GE(rate, 0.995) << t.found << " of " << t.detectable;
+  EXPECT_EQ(t.false_detections, 0);
+}
+
+// Issue 3 §7 sets the corner target at 0.07 px RMS in every distance class;
+// the test holds the detector to it per class (each class gets 150-300
+// detections, so the RMS itself is known to ~5 %), and no single marker may
+// be off by more than 0.5 px (a corner placed from the wrong edge would be
+// off by pixels).
+TEST_F(DetectorRendered, CornerRmsIsWithinTheTargetInEveryDistanceClass) {
+  const Tally t = run(sim::SceneOptions{}, 300, 12);
+  for (int c = 0; c < 3; ++c) {
+    ASSERT_GT(t.corners[c], 50) << detector_test::distance_class_name(c);
+    const double rms = std::sqrt(t.sum_sq[c] / t.corners[c]);
+    RecordProperty(std::string("corner_rms_px_") + detector_test::distance_class_name(c),
+                   std::to_string(rms));
+    EXPECT_LE(rms, 0.07) << detector_test::distance_class_name(c);
+  }
+  EXPECT_LE(t.worst_rms, 0.5);
+}
+
+// Markers cut by the image border are rejected, not mis-cornered. In this
+// frame set the three measurement markers of the sheet leave the image at
+// close range, so there are hundreds of cut markers.
+TEST_F(DetectorRendered, MarkersCutByTheImageBorderAreNotDetected) {
+  const Tally t = run(sim::SceneOptions{}, 150, 13);
+  ASSERT_GT(t.cut, 50);
+  EXPECT_EQ(t.cut_detected, 0) << "of " << t.cut << " cut markers";
+  EXPECT_EQ(t.false_detections, 0);
+}
+
+// Opaque bars (8-40 px wide) across marker outlines: an occluded marker is
+// rejected, never mis-cornered, and the others are still found. The
+// renderer calls a marker occluded also when a bar merely comes within
+// 3 sigma + 1 = 2.8 px of its outline without touching it; such a marker may
+// be detected, but then its corners must be as good as an unoccluded
+// marker's (0.07 px), and such near misses are rare (<= 1 %).
+TEST_F(DetectorRendered, OccludedMarkersAreRejectedNotMisCornered) {
+  sim::SceneOptions o;
+  o.occluders = 2;
+  const Tally t = run(o, 200, 14);
+  ASSERT_GT(t.occluded, 150);
+  EXPECT_LE(t.occluded_detected, t.occluded / 100) << "of " << t.occluded << " occluded markers";
+  EXPECT_LE(t.occluded_worst_rms, 0.07);
+  EXPECT_EQ(t.cut_detected, 0);
+  EXPECT_EQ(t.false_detections, 0);
+  EXPECT_GE(static_cast<double>(t.found) / t.detectable, 0.99);
+}
+
+// Issue 3 §6: zero false detections over >= 1,000 clutter-only frames
+// (rectangles, quadrilaterals, ellipses, lines, checker patches) at the
+// default setting.
+TEST_F(DetectorRendered, ClutterOnlyFramesGiveNoDetections) {
+  sim::SceneOptions o;
+  o.show_target = false;
+  o.clutter_shapes = 40;
+  const sim::SceneRenderer renderer(camera_, target_, codebook_, o);
+  const auto poses = detector_test::sample_poses(camera_, 1000, 15);
+  int false_detections = 0, candidates = 0;
+  for (int i = 0; i < 1000; ++i) {
+    vision::DetectorStats stats;
+    false_detections += static_cast<int>(
+        detector_.detect(renderer.render(poses[i], 1500000 + i).image, &stats).size());
+    candidates += stats.candidates;
+  }
+  RecordProperty("candidates", candidates);
+  // The clutter must produce quadrilaterals for the test to mean anything.
+  EXPECT_GT(candidates, 1000);
+  EXPECT_EQ(false_detections, 0);
+}
+
+// Clutter around the sheet does not hide markers nor add detections.
+TEST_F(DetectorRendered, ClutterAroundTheSheetAddsNoDetections) {
+  sim::SceneOptions o;
+  o.clutter_shapes = 40;
+  const Tally t = run(o, 150, 16);
+  EXPECT_EQ(t.false_detections, 0);
+  EXPECT_GE(static_cast<double>(t.found) / t.detectable, 0.99);
+}
+
+}  // namespace
