@@ -1,6 +1,8 @@
 #include "vision/gige_source.hpp"
 
 #include <arv.h>
+#include <pthread.h>
+#include <sched.h>
 
 #include <cstring>
 #include <utility>
@@ -39,6 +41,17 @@ const char* status_name(ArvBufferStatus status) {
   }
 }
 
+// ArvStreamCallback: runs on Aravis's stream thread; at its start, asks for
+// real-time scheduling if the options want it.
+void on_stream_event(void* user_data, ArvStreamCallbackType type, ArvBuffer* /*buffer*/) {
+  if (type != ARV_STREAM_CALLBACK_TYPE_INIT) return;
+  auto* realtime = static_cast<std::atomic<int>*>(user_data);
+  if (realtime->load() == 0) return;
+  sched_param param{};
+  param.sched_priority = 10;
+  realtime->store(pthread_setschedparam(pthread_self(), SCHED_FIFO, &param) == 0 ? 2 : 1);
+}
+
 void on_control_lost(ArvDevice* /*device*/, gpointer flag) {
   static_cast<std::atomic<bool>*>(flag)->store(true);
 }
@@ -50,6 +63,8 @@ struct GigeSource::Impl {
   ArvStream* stream = nullptr;
   gulong control_lost_handler = 0;
   std::atomic<bool> control_lost{false};
+  // 0: not wanted, 1: wanted (or refused), 2: the stream thread runs SCHED_FIFO.
+  std::atomic<int> realtime{0};
   // A trigger was sent and its frame has not been delivered yet: only then
   // does a grab that times out trigger again.
   bool trigger_pending = false;
@@ -159,13 +174,14 @@ void GigeSource::open() {
   // The plain UDP socket, not Aravis's packet socket (which needs CAP_NET_RAW
   // and bypasses the socket buffer): the same path whoever runs the rig.
   arv_camera_gv_set_stream_options(impl->camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
-  impl->stream = arv_camera_create_stream(impl->camera, nullptr, nullptr, &error);
+  impl->realtime = options_.realtime_receiver ? 1 : 0;
+  impl->stream = arv_camera_create_stream(impl->camera, on_stream_event, &impl->realtime, &error);
   check("creating the stream");
   g_object_set(impl->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
                "socket-buffer-size", options_.socket_buffer_bytes, "packet-resend",
                options_.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS
                                       : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-               nullptr);
+               "frame-retention", static_cast<guint>(options_.frame_retention_ms) * 1000u, nullptr);
   const guint payload = arv_camera_get_payload(impl->camera, &error);
   check("reading PayloadSize");
   for (int i = 0; i < options_.n_buffers; ++i)
@@ -268,6 +284,10 @@ Frame GigeSource::grab(std::chrono::milliseconds timeout) {
     impl_->trigger_pending = false;
     return frame;
   }
+}
+
+bool GigeSource::realtime_receiver() const {
+  return impl_ && impl_->realtime.load() == 2;
 }
 
 void GigeSource::close() {

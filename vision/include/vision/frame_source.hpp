@@ -133,6 +133,18 @@ struct CaptureOptions {
   // GigE: ask the camera to resend missing packets (GVSP resend). Off makes a
   // lost packet an incomplete frame at once.
   bool packet_resend = true;
+  // GigE: how long, in ms, a partly received frame waits for its missing
+  // packets (and their resends) before it is given up as incomplete. Aravis's
+  // 100 ms is shorter than the time a receiving thread can be descheduled on a
+  // loaded 2-core host, which then closes frames whose packets are waiting in
+  // the socket buffer; longer reports a truly broken link later.
+  int frame_retention_ms = 1000;
+  // GigE: run the stream's receiving thread under SCHED_FIFO (priority 10)
+  // when the process may (root, CAP_SYS_NICE or an RLIMIT_RTPRIO), so that a
+  // busy host cannot starve it while the camera keeps sending; otherwise it
+  // stays at normal priority (GigeSource::realtime_receiver() tells which).
+  // The thread sleeps in poll() between packets, so it cannot monopolize a core.
+  bool realtime_receiver = true;
 };
 
 // Makes a source from a spec:

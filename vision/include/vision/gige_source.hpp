@@ -47,6 +47,9 @@ class GigeSource final : public FrameSource {
 
   // After open(): the camera's device id and address as Aravis reports them.
   const std::string& device_id() const { return device_id_; }
+  // After open(): whether the receiving thread got real-time scheduling
+  // (CaptureOptions::realtime_receiver).
+  bool realtime_receiver() const;
 
  private:
   struct Impl;
