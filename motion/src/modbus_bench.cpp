@@ -99,6 +99,12 @@ void ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
                          "its position is unknown: home it before moving");
   }
   if (s.homed) homed_seen_ = true;
+  if (pending_ == Pending::kHome && !s.homed && !s.moving) {
+    pending_ = Pending::kNone;
+    throw BenchLinkError("bench " + link_.url().str() +
+                         ": after reconnect the bench is neither homing nor homed (drive "
+                         "restarted?): home it again");
+  }
   if (pending_ == Pending::kMove) {
     std::array<std::int32_t, 2> counts{};
     const int err = read_targets(counts);

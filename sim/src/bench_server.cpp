@@ -212,7 +212,7 @@ void BenchServer::network_loop() {
     if (rtu) {
       const int rc = modbus_receive(ctx_, query);
       if (rc > 0) {
-        handle(serial_fd, query, rc);
+        handle(query, rc);
       } else if (rc == -1) {
         modbus_flush(ctx_);  // a garbled frame: drop what is left of it
       }
@@ -233,7 +233,7 @@ void BenchServer::network_loop() {
       if (!FD_ISSET(fd, &rd) || Clock::now() < stall_until_) continue;
       modbus_set_socket(ctx_, fd);
       const int rc = modbus_receive(ctx_, query);
-      if (rc == -1 || (rc > 0 && !handle(fd, query, rc))) {
+      if (rc == -1 || (rc > 0 && !handle(query, rc))) {
         ::close(fd);
         clients.erase(std::find(clients.begin(), clients.end(), fd));
       }
@@ -243,7 +243,7 @@ void BenchServer::network_loop() {
     ::close(fd);
 }
 
-bool BenchServer::handle(int /*fd*/, const std::uint8_t* query, int length) {
+bool BenchServer::handle(const std::uint8_t* query, int length) {
   const int h = modbus_get_header_length(ctx_);
   const int function = query[h];
   auto word = [&](int offset) { return (query[h + offset] << 8) | query[h + offset + 1]; };

@@ -56,6 +56,21 @@ class ChildProcess {
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
 
+  // Sends `sig` and waits up to `timeout` for the child to exit. Returns its
+  // exit status (128 + signal if a signal killed it), or nothing if it is
+  // still running.
+  std::optional<int> signal_and_wait(int sig, std::chrono::milliseconds timeout) {
+    kill(pid_, sig);
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    int status = 0;
+    while (waitpid(pid_, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > deadline) return std::nullopt;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    pid_ = -1;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+
   // The next line of the child's stdout, or nothing after `timeout` or EOF.
   std::optional<std::string> read_line(std::chrono::milliseconds timeout) {
     const auto deadline = std::chrono::steady_clock::now() + timeout;

@@ -84,17 +84,15 @@ TEST_F(ModbusBench, AlarmRaisesBenchFaultWithCodeAndMeaning) {
 
 TEST_F(ModbusBench, ResetAlarmClearsItAndTheBenchMovesAgain) {
   auto bench = homed_bench();
-  bench->move_to(600 - 100, 400 - 100 - 1);  // (500, 299): inside the soft limits
-  bench->wait_settled(5s);
   sim::FaultPlan faults;
-  faults.alarm_at = sim::AlarmAt{490, 299, 0.5, 2};
+  faults.alarm_at = sim::AlarmAt{10, 0, 0.5, 2};
   server_->inject(faults);
-  bench->move_to(480, 299);
+  bench->move_to(20, 0);
   EXPECT_THROW(bench->wait_settled(5s), motion::BenchFault);
   bench->reset_alarm();
   EXPECT_FALSE(bench->status().alarm);
-  bench->move_to(480, 299);
-  EXPECT_NEAR(bench->wait_settled(5s).position.x_mm, 480, 1e-9);
+  bench->move_to(20, 0);
+  EXPECT_NEAR(bench->wait_settled(5s).position.x_mm, 20, 1e-9);
 }
 
 TEST_F(ModbusBench, MoveBeforeHomingRaisesNotHomed) {
@@ -243,6 +241,30 @@ TEST_F(ModbusBench, ServerKilledAndRestartedMidMoveRaisesInsteadOfResuming) {
   bench->wait_settled(5s);
   bench->move_to(1, 2);
   EXPECT_NEAR(bench->wait_settled(5s).position.y_mm, 2, 1e-9);
+}
+
+TEST_F(ModbusBench, ServerKilledAndRestartedDuringHomingRaises) {
+  sim_.time_scale = 1;  // homing from (20, 20) mm at 50 mm/s: ~0.45 s
+  start_server();
+  const int port = server_->port();
+  auto bench = connect();
+  bench->home();
+  std::this_thread::sleep_for(50ms);
+  server_.reset();
+  std::thread restart([&] {
+    std::this_thread::sleep_for(100ms);
+    options_.port = port;
+    start_server();
+  });
+  try {
+    bench->wait_settled(5s);
+    restart.join();
+    FAIL() << "homing reported done by a restarted drive";
+  } catch (const motion::BenchLinkError& e) {
+    restart.join();
+    EXPECT_NE(std::string(e.what()).find("neither homing nor homed"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST_F(ModbusBench, UnreachableBenchRaisesLinkErrorAfterTheReconnectTimeout) {

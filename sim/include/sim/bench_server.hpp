@@ -90,7 +90,7 @@ class BenchServer {
   void start_network();
   void stop_network();
   // Returns false when the connection must be closed.
-  bool handle(int fd, const std::uint8_t* query, int length);
+  bool handle(const std::uint8_t* query, int length);
   void refresh_feedback();
   void apply_write(int first, int count);
   bool wait_wall(std::chrono::microseconds d);  // false if stopping
