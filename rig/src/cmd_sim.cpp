@@ -1,6 +1,7 @@
 // rig sim: the simulated rig on loopback. `rig sim bench` runs the simulated
-// Modbus bench alone. The simulated camera is another part started beside the
-// bench in SimRig (see start_parts), so `rig sim` can run the whole rig.
+// Modbus bench alone; `rig sim --config config/sim.toml` runs the bench and,
+// beside it in SimRig, the GigE camera whose frames are rendered from the
+// bench's actual position (sim/camera_server.hpp).
 #include <csignal>
 #include <iostream>
 #include <memory>
@@ -8,7 +9,11 @@
 #include <motion/errors.hpp>
 #include <sim/bench_config.hpp>
 #include <sim/bench_server.hpp>
+#include <sim/camera_config.hpp>
 #include <string>
+#include <vision/camera.hpp>
+#include <vision/rig_geometry.hpp>
+#include <vision/target.hpp>
 
 #include "commands.hpp"
 
@@ -48,6 +53,7 @@ struct SimBenchOptions {
 // start_parts and stopped, in reverse order, when SimRig is destroyed.
 struct SimRig {
   std::unique_ptr<sim::BenchServer> bench;
+  std::unique_ptr<sim::CameraServer> camera;  // renders from bench->actual_position_mm()
 };
 
 std::unique_ptr<sim::BenchServer> start_bench(const SimBenchOptions& o) {
@@ -82,12 +88,66 @@ int run_until_stopped(const SimBenchOptions& bench_options) {
   return kExitOk;
 }
 
+// rig sim --config FILE: the bench and the camera that sees from it.
+int run_rig_until_stopped(const std::string& config_path) {
+  StopSignals signals;  // before any server thread exists
+  SimRig rig;
+  try {
+    const sim::SimRigConfig config = sim::load_sim_rig_config(config_path);
+    SimBenchOptions bench_options;
+    bench_options.config = config.bench_config;
+    bench_options.host = config.bench_host;
+    bench_options.port = config.bench_port;
+    rig.bench = start_bench(bench_options);
+    const sim::BenchServer* bench = rig.bench.get();
+    rig.camera = sim::make_camera_server(config, [bench] {
+      const motion::XY p = bench->actual_position_mm();
+      return std::make_pair(p.x_mm, p.y_mm);
+    });
+    rig.camera->start();
+    std::cout << "rig sim camera: serving " << rig.camera->device_id() << " at "
+              << rig.camera->address() << " (rig capture --camera gige:" << rig.camera->address()
+              << ")" << std::endl;
+  } catch (const motion::ProfileError& e) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const vision::RigConfigError& e) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const vision::TargetError& e) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const vision::CalibrationError& e) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return kExitFailure;
+  }
+  const int sig = signals.wait();
+  std::cout << "rig sim: " << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ", stopping" << std::endl;
+  rig.camera->stop();
+  rig.bench->stop();
+  return kExitOk;
+}
+
 }  // namespace
 
 void add_sim_command(CLI::App& app, ExitStatus& status) {
   CLI::App* sim = app.add_subcommand("sim", "Run the simulated rig (Modbus bench) on loopback");
-  sim->require_subcommand(1);
-  sim->footer("Example: rig sim bench --port 1502 --config config/benches/sim.toml");
+  sim->require_subcommand(0, 1);
+  auto rig_config = std::make_shared<std::string>("config/sim.toml");
+  sim->add_option("--config", *rig_config,
+                  "Simulated rig file: bench, camera, target and geometry (config/sim.toml)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  sim->footer(
+      "Without a subcommand: the bench and the GigE camera together, until SIGINT or SIGTERM.\n"
+      "Example: rig sim --config config/sim.toml\n"
+      "         rig sim bench --port 1502 --config config/benches/sim.toml");
+  sim->callback([&status, sim, rig_config] {
+    if (sim->get_subcommands().empty()) status.code = run_rig_until_stopped(*rig_config);
+  });
 
   auto bench_options = std::make_shared<SimBenchOptions>();
   CLI::App* bench = sim->add_subcommand(

@@ -11,10 +11,13 @@
 
 #include <atomic>
 #include <chrono>
+#include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <thread>
 
+#include "sim/camera_config.hpp"
 #include "vision/gige_source.hpp"
 
 namespace {
@@ -170,6 +173,35 @@ TEST_F(SimCamera, SecondCameraOnTheSameAddressIsRefused) {
   start();
   sim::CameraServer second(renderer_, geometry_, [this] { return bench_.actual(); });
   EXPECT_THROW(second.start(), std::runtime_error);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(SimRigConfig, ShippedFileResolvesItsPathsAgainstItsFolder) {
+  const std::string dir = std::string(RIG_SOURCE_DIR) + "/config";
+  const sim::SimRigConfig c = sim::load_sim_rig_config(dir + "/sim.toml");
+  EXPECT_EQ(c.bench_config, dir + "/benches/sim.toml");
+  EXPECT_EQ(c.rig_geometry, dir + "/rigs/sim.toml");
+  EXPECT_EQ(c.target, dir + "/targets/paper.toml");
+  EXPECT_TRUE(c.calibration.empty());
+  EXPECT_EQ(c.bench_port, 1502);
+  EXPECT_EQ(c.camera.serial, "RIGSIM01");
+  EXPECT_EQ(c.camera.trigger_poll_hz, 1000);
+}
+
+TEST(SimRigConfig, MissingFileOrKeyIsAnErrorNamingIt) {
+  EXPECT_THROW(sim::load_sim_rig_config("/nonexistent/sim.toml"), std::runtime_error);
+  const auto path = std::filesystem::temp_directory_path() / "rig_sim_config_test.toml";
+  std::ofstream(path) << "[bench]\nconfig = \"b.toml\"\n";
+  try {
+    sim::load_sim_rig_config(path.string());
+    ADD_FAILURE() << "a file without [camera] loaded";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("camera.rig"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }
 
 }  // namespace
