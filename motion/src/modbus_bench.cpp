@@ -65,15 +65,15 @@ void ModbusBench::reconnect(const char* what, bool first) {
       // commanded.
       if (first) {
         homed_seen_ = s.homed;
-      } else {
-        check_state_after_reconnect(s);
+        return;
       }
-      return;
+      err = check_state_after_reconnect(s);
+      if (err == 0) return;
     }
     if (!ModbusLink::is_link_error(err)) {
-      throw BenchError("bench " + link_.url().str() + ": reading the status after " + what +
+      throw BenchError("bench " + link_.url().str() + ": reading the bench state after " + what +
                        " failed: " + ModbusLink::describe(err) +
-                       " (do the profile's feedback registers exist on this drive?)");
+                       " (do the profile's registers exist on this drive?)");
     }
     link_.close();
     if (Clock::now() + backoff > deadline) break;
@@ -86,7 +86,7 @@ void ModbusBench::reconnect(const char* what, bool first) {
                        " ms: " + ModbusLink::describe(err));
 }
 
-void ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
+int ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
   if (s.alarm) {
     throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
                          " (" + s.alarm_meaning + ") found after reconnect",
@@ -107,12 +107,7 @@ void ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
   }
   if (pending_ == Pending::kMove) {
     std::array<std::int32_t, 2> counts{};
-    const int err = read_targets(counts);
-    if (err != 0) {
-      throw BenchLinkError(
-          "bench " + link_.url().str() +
-          ": reading the targets after reconnect failed: " + ModbusLink::describe(err));
-    }
+    if (const int err = read_targets(counts); err != 0) return err;
     if (counts != target_counts_) {
       pending_ = Pending::kNone;
       throw BenchLinkError("bench " + link_.url().str() +
@@ -124,6 +119,7 @@ void ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
   }
   spdlog::debug("bench {}: state read: ({}, {}) mm, homed {}, moving {}", link_.url().str(),
                 s.position.x_mm, s.position.y_mm, s.homed, s.moving);
+  return 0;
 }
 
 template <class Op>

@@ -68,7 +68,9 @@ class ModbusBench : public Bench {
   // Connects with backoff until the profile's reconnect timeout, then reads
   // the state; unless `first`, checks it against what was commanded.
   void reconnect(const char* what, bool first);
-  void check_state_after_reconnect(const BenchStatus& s);
+  // Raises if the re-read state contradicts what was commanded; returns the
+  // errno of a failed read (0 if none), after which the reconnect goes on.
+  int check_state_after_reconnect(const BenchStatus& s);
   int read_feedback(BenchStatus& out);
   int read_targets(std::array<std::int32_t, 2>& counts);
   // Writes registers (address -> value), grouped into contiguous runs, and
