@@ -145,6 +145,12 @@ TEST(SceneRenderer, EdgesLieWhereTheCameraModelProjectsThemTiltedFortyDegrees) {
   expect_left_edge_exact(pose(0.12, -35, 20, -20));
 }
 
+// Grazing views stretch a pixel's footprint along the sheet and curve the
+// pixel-to-sheet mapping most: the edge stays exact at 70 degrees.
+TEST(SceneRenderer, EdgesLieWhereTheCameraModelProjectsThemAtGrazingSeventyDegrees) {
+  expect_left_edge_exact(pose(0.25, 0, 70, 5));
+}
+
 // Aliasing: the ink seen in a window around a marker must not depend on where
 // the marker falls relative to the pixel grid. Point sampling of a 35 px
 // marker (1 m) changes it by ~1 % from one 0.1 px shift to the next; area
