@@ -20,6 +20,9 @@ struct ExitStatus {
 };
 
 // rig marker --id N --size-mm 50 --out FILE (cmd_marker.cpp).
+// rig solve FILE|- (cmd_solve.cpp).
+void add_solve_command(CLI::App& app, ExitStatus& status);
+
 void add_marker_command(CLI::App& app, ExitStatus& status);
 // rig target --target FILE --out FILE (cmd_target.cpp).
 void add_target_command(CLI::App& app, ExitStatus& status);

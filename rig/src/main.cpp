@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("rig ") + RIG_VERSION);
   app.require_subcommand(1);
   rig::ExitStatus status;
+  rig::add_solve_command(app, status);
   rig::add_capture_command(app, status);
   rig::add_marker_command(app, status);
   rig::add_target_command(app, status);

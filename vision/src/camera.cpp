@@ -234,25 +234,43 @@ bool Camera::undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) 
   *xy = Eigen::Vector2d(nan, nan);
   if (!pixel.allFinite()) return false;
   // Start from the distorted normalized point: for real lenses the correction
-  // is small and Newton converges quadratically from there in 3-6 steps.
+  // is small and Newton converges quadratically from there in 3-6 steps. It
+  // runs on to the rounding floor (1e-12 px) so that the answer is the inverse
+  // to the last digits, and is accepted within kUndistortTolerancePx.
+  constexpr double kRoundingFloorPx = 1e-12;
   Eigen::Vector2d x((pixel.x() - intrinsics_.cx) / intrinsics_.fx,
                     (pixel.y() - intrinsics_.cy) / intrinsics_.fy);
+  Eigen::Vector2d best = x;
+  double best_residual = std::numeric_limits<double>::infinity();
   constexpr int kMaxIterations = 50;
   for (int i = 0; i < kMaxIterations; ++i) {
     const Eigen::Vector2d residual = distort_normalized(x) - pixel;  // pixels
-    if (!residual.allFinite()) return false;
-    if (residual.norm() <= kUndistortTolerancePx) {
-      *xy = x;
-      return true;
+    if (!residual.allFinite()) break;
+    if (residual.norm() < best_residual) {
+      best_residual = residual.norm();
+      best = x;
     }
+    if (best_residual <= kRoundingFloorPx) break;
     const Eigen::Matrix2d j = distort_jacobian(x);
-    const double det = j.determinant();
     // A vanishing Jacobian determinant marks the fold of the polynomial model,
     // beyond which it is not invertible.
-    if (!(std::abs(det) > 1e-12 * intrinsics_.fx * intrinsics_.fy)) return false;
+    if (!(std::abs(j.determinant()) > 1e-12 * intrinsics_.fx * intrinsics_.fy)) break;
     x -= j.inverse() * residual;
   }
-  return false;
+  if (!(best_residual <= kUndistortTolerancePx)) return false;
+  // A root past the fold (where the radial model turns back) is not where any
+  // ray lands: only the branch that contains the centre is the lens. On it,
+  // r_d(r) = r (1 + k1 r^2 + k2 r^4 + k3 r^6) increases from 0 to r: its
+  // derivative 1 + 3 k1 r^2 + 5 k2 r^4 + 7 k3 r^6 stays positive (checked at
+  // 32 radii; a fold narrower than r/32 would need coefficients no lens has).
+  const auto& d = distortion_;
+  const double r2_max = best.squaredNorm();
+  for (int k = 1; k <= 32; ++k) {
+    const double r2 = r2_max * (k / 32.0) * (k / 32.0);
+    if (!(1 + r2 * (3 * d.k1 + r2 * (5 * d.k2 + r2 * 7 * d.k3)) > 0)) return false;
+  }
+  *xy = best;
+  return true;
 }
 
 std::vector<Eigen::Vector2d> Camera::undistort_points(

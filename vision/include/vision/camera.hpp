@@ -1,4 +1,6 @@
-// vision::Camera: the pinhole camera with Brown-Conrady lens distortion.
+// build-<you>, commit only your own paths with `git commit -- paths`, never git
+// stash/reset/checkout, deadline 07:30 UTC). <<< vision::Camera: the pinhole camera with
+// Brown-Conrady lens distortion.
 //
 // Frames and units. A point p_cam (metres) in the camera frame (x right, y down,
 // z forward along the optical axis) projects to the normalized image point
@@ -93,10 +95,12 @@ class Camera {
 
   // Inverts the lens model: from an observed (distorted) pixel to the
   // undistorted normalized point whose projection is that pixel. Newton's
-  // method on the 2x2 distortion Jacobian, stopped when the re-distorted point
-  // is within 1e-9 px of the input. Returns false (and leaves xy NaN) when the
-  // iteration does not reach that, which happens only outside the region where
-  // the polynomial model is invertible (far beyond the image for real lenses).
+  // method on the 2x2 distortion Jacobian, run to the rounding floor and
+  // accepted when the re-distorted point is within 1e-9 px of the input.
+  // Returns false (and leaves xy NaN) when no such point exists on the lens's
+  // own branch (the one containing the centre, before the polynomial folds
+  // back): outside the region where the model is invertible, which for real
+  // lenses lies far beyond the image.
   bool undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) const;
 
   // undistort_point over many pixels; a point that does not converge is NaN.

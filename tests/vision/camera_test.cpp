@@ -1,0 +1,210 @@
+// vision::Camera against OpenCV's own lens model, and the calibration loaders
+// on files written by OpenCV's FileStorage and in ROS camera_info form.
+#include "vision/camera.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <opencv2/calib3d.hpp>
+#include <random>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// A grid of camera-frame points whose projections cover the image and a
+// margin beyond it, at the paper's depths.
+std::vector<cv::Point3d> grid_points(const vision::Camera& cam) {
+  std::vector<cv::Point3d> pts;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.1, 1.1), z(0.1, 1.0);
+  const auto& k = cam.intrinsics();
+  for (int i = 0; i < 2000; ++i) {
+    const double depth = z(rng);
+    const double px = u(rng) * cam.width_px(), py = u(rng) * cam.height_px();
+    pts.emplace_back((px - k.cx) / k.fx * depth, (py - k.cy) / k.fy * depth, depth);
+  }
+  return pts;
+}
+
+TEST(Camera, ProjectMatchesCvProjectPointsTo1e9Px) {
+  const auto cam = vision::Camera::paper_default();
+  const auto pts = grid_points(cam);
+  std::vector<cv::Point2d> expected;
+  cv::projectPoints(pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cam.camera_matrix_cv(),
+                    cam.distortion_cv(), expected);
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Vector2d px = cam.project({pts[i].x, pts[i].y, pts[i].z});
+    // Both evaluate the same polynomial in double precision: differences are
+    // rounding, ~1e-13 px at these magnitudes.
+    EXPECT_NEAR(px.x(), expected[i].x, 1e-9);
+    EXPECT_NEAR(px.y(), expected[i].y, 1e-9);
+  }
+}
+
+TEST(Camera, UndistortMatchesCvUndistortPointsTo1e9Px) {
+  const auto cam = vision::Camera::paper_default();
+  std::vector<cv::Point2d> pixels;
+  for (int v = 0; v < cam.height_px(); v += 10)
+    for (int u = 0; u < cam.width_px(); u += 10)
+      pixels.emplace_back(u + 0.37, v + 0.81);
+  // OpenCV's default stops after 5 fixed-point steps; asked to run to
+  // convergence it reaches the same inverse as our Newton iteration.
+  std::vector<cv::Point2d> expected;
+  cv::undistortPoints(
+      pixels, expected, cam.camera_matrix_cv(), cam.distortion_cv(), cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 1000, 1e-16));
+  const auto& k = cam.intrinsics();
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    Eigen::Vector2d xy;
+    ASSERT_TRUE(cam.undistort_point({pixels[i].x, pixels[i].y}, &xy));
+    // Compared on the image: normalized differences scaled by the focal length.
+    EXPECT_NEAR(k.fx * xy.x(), k.fx * expected[i].x, 1e-9);
+    EXPECT_NEAR(k.fy * xy.y(), k.fy * expected[i].y, 1e-9);
+    // And the round trip lands on the pixel within the stated tolerance.
+    EXPECT_LE((cam.distort_normalized(xy) - Eigen::Vector2d(pixels[i].x, pixels[i].y)).norm(),
+              vision::Camera::kUndistortTolerancePx);
+  }
+}
+
+TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
+  const auto cam = vision::Camera::paper_default();
+  const double h = 1e-7;
+  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0.3, -0.2), Eigen::Vector2d(-0.5, 0.35)}) {
+    const Eigen::Matrix2d J = cam.distort_jacobian(xy);
+    for (int k = 0; k < 2; ++k) {
+      Eigen::Vector2d d = Eigen::Vector2d::Zero();
+      d(k) = h;
+      const Eigen::Vector2d numeric =
+          (cam.distort_normalized(xy + d) - cam.distort_normalized(xy - d)) / (2 * h);
+      // Central differences: truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px.
+      EXPECT_NEAR(J(0, k), numeric.x(), 1e-5);
+      EXPECT_NEAR(J(1, k), numeric.y(), 1e-5);
+    }
+  }
+}
+
+class CalibrationFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("rig_calib_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+  void write(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+  }
+  fs::path dir_;
+};
+
+// What OpenCV's calibration sample writes: FileStorage with these keys.
+void write_opencv_calibration(const std::string& file, const cv::Mat& K, const cv::Mat& D) {
+  cv::FileStorage fs(file, cv::FileStorage::WRITE);
+  fs << "calibration_time"
+     << "2026-11-22"
+     << "image_width" << 736 << "image_height" << 571;
+  fs << "camera_matrix" << K << "distortion_coefficients" << D << "avg_reprojection_error" << 0.21;
+}
+
+TEST_F(CalibrationFiles, LoadsOpenCvYamlAndXmlWrittenByFileStorage) {
+  const auto ref = vision::Camera::paper_default();
+  for (const std::string& name : {std::string("calib.yaml"), std::string("calib.xml")}) {
+    write_opencv_calibration(path(name), ref.camera_matrix_cv(), ref.distortion_cv().t());
+    const auto cam = vision::Camera::load(path(name));
+    EXPECT_EQ(cam.width_px(), 736);
+    EXPECT_EQ(cam.height_px(), 571);
+    EXPECT_DOUBLE_EQ(cam.intrinsics().fy, 731.1);
+    EXPECT_DOUBLE_EQ(cam.intrinsics().cx, 388.0);
+    EXPECT_DOUBLE_EQ(cam.distortion().k1, -0.2279);
+    EXPECT_DOUBLE_EQ(cam.distortion().p2, 0.0006245);
+  }
+}
+
+TEST_F(CalibrationFiles, LoadsEightCoefficientFilesWhenTheRationalTermsAreZero) {
+  const auto ref = vision::Camera::paper_default();
+  cv::Mat D = cv::Mat::zeros(1, 8, CV_64F);
+  ref.distortion_cv().copyTo(D.colRange(0, 5));
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), D);
+  EXPECT_DOUBLE_EQ(vision::Camera::load(path("c.yml")).distortion().k2, 0.1479);
+  D.at<double>(0, 6) = 0.01;
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), D);
+  EXPECT_THROW(vision::Camera::load(path("c.yml")), vision::CalibrationError);
+}
+
+TEST_F(CalibrationFiles, LoadsRosCameraInfoYaml) {
+  write("ros.yaml", R"(image_width: 640
+image_height: 480
+camera_name: narrow_stereo
+camera_matrix:
+  rows: 3
+  cols: 3
+  data: [600.5, 0, 320.25, 0, 601.75, 240.5, 0, 0, 1]
+distortion_model: plumb_bob
+distortion_coefficients:
+  rows: 1
+  cols: 5
+  data: [-0.1, 0.01, 0.001, -0.002, 0.0005]
+rectification_matrix:
+  rows: 3
+  cols: 3
+  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]
+)");
+  const auto cam = vision::Camera::load(path("ros.yaml"));
+  EXPECT_EQ(cam.width_px(), 640);
+  EXPECT_DOUBLE_EQ(cam.intrinsics().fx, 600.5);
+  EXPECT_DOUBLE_EQ(cam.intrinsics().cy, 240.5);
+  EXPECT_DOUBLE_EQ(cam.distortion().p1, 0.001);
+  EXPECT_DOUBLE_EQ(cam.distortion().k3, 0.0005);
+}
+
+void expect_error(const std::string& file, const std::string& words) {
+  try {
+    vision::Camera::load(file);
+    FAIL() << "expected CalibrationError with '" << words << "'";
+  } catch (const vision::CalibrationError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find(file), std::string::npos) << what;
+    EXPECT_NE(what.find(words), std::string::npos) << what;
+  }
+}
+
+TEST_F(CalibrationFiles, MissingFileNamesTheFile) {
+  expect_error(path("nope.yaml"), "cannot be opened");
+}
+
+TEST_F(CalibrationFiles, MissingKeyNamesTheKey) {
+  cv::FileStorage fs(path("k.yaml"), cv::FileStorage::WRITE);
+  fs << "image_width" << 736 << "image_height" << 571 << "camera_matrix"
+     << vision::Camera::paper_default().camera_matrix_cv();
+  fs.release();
+  expect_error(path("k.yaml"), "key 'distortion_coefficients' is missing");
+}
+
+TEST_F(CalibrationFiles, MalformedMatrixNamesTheKeyAndShape) {
+  write_opencv_calibration(path("m.yaml"), cv::Mat::eye(2, 3, CV_64F),
+                           vision::Camera::paper_default().distortion_cv());
+  expect_error(path("m.yaml"), "key 'camera_matrix' must be 3x3, got 2x3");
+}
+
+TEST_F(CalibrationFiles, RosDataCountMismatchNamesTheKey) {
+  write("bad.yaml",
+        "image_width: 640\nimage_height: 480\ncamera_matrix:\n  rows: 3\n  cols: 3\n"
+        "  data: [1, 0, 0, 0, 1]\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n"
+        "  data: [0, 0, 0, 0, 0]\n");
+  expect_error(path("bad.yaml"), "key 'camera_matrix' has 5 values but rows x cols = 3x3");
+}
+
+TEST_F(CalibrationFiles, SaveThenLoadRoundTrips) {
+  const auto ref = vision::Camera::paper_default();
+  ref.save(path("out.yaml"));
+  const auto back = vision::Camera::load(path("out.yaml"));
+  EXPECT_DOUBLE_EQ(back.intrinsics().fx, ref.intrinsics().fx);
+  EXPECT_DOUBLE_EQ(back.distortion().p1, ref.distortion().p1);
+  EXPECT_EQ(back.height_px(), ref.height_px());
+}
+
+}  // namespace
