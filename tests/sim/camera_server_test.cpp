@@ -153,7 +153,9 @@ TEST_F(SimCamera, NoFrameLostOrIncompleteOver500FramesWithTheOtherCoreBusy) {
       n = n + 1;
   });
   source.open();
-  EXPECT_TRUE(source.realtime_receiver()) << "tests run as root in CI; elsewhere losses may occur";
+  // Real-time scheduling of the receiver helps but is not required: the fixed
+  // socket buffer and the frame retention carry a descheduled receiver.
+  RecordProperty("realtime_receiver", source.realtime_receiver() ? "yes" : "no");
   uint64_t previous = 0;
   int gaps = 0;
   for (int i = 0; i < 500; ++i) {
