@@ -1,0 +1,181 @@
+// `rig solve` as a user runs it: the real binary, real files, exit codes.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+struct CliRun {
+  int exit_code = -1;
+  std::string out;  // stdout and stderr together
+};
+
+CliRun run(const std::string& args, const std::string& stdin_text = "") {
+  const fs::path input =
+      fs::temp_directory_path() / ("rig_solve_stdin_" + std::to_string(::getpid()));
+  std::ofstream(input) << stdin_text;
+  const std::string cmd =
+      std::string(RIG_BINARY_DIR) + "/rig/rig " + args + " < " + input.string() + " 2>&1";
+  CliRun r;
+  FILE* pipe = ::popen(cmd.c_str(), "r");
+  std::array<char, 4096> buf;
+  size_t n;
+  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0)
+    r.out.append(buf.data(), n);
+  const int status = ::pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  fs::remove(input);
+  return r;
+}
+
+const std::string kSample = std::string(RIG_SOURCE_DIR) + "/config/problems/paper_marker.json";
+
+nlohmann::json sample() {
+  std::ifstream in(kSample);
+  return nlohmann::json::parse(in);
+}
+
+TEST(RigSolve, SampleProblemPrintsEverySolverAsJson) {
+  const CliRun r = run("solve --json " + kSample);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["estimates"].size(), 10u);
+  for (const auto& e : j["estimates"]) {
+    ASSERT_FALSE(e.contains("skipped")) << e.dump();
+    EXPECT_EQ(e["R"].size(), 3u);
+    EXPECT_EQ(e["t"].size(), 3u);
+    for (const char* key :
+         {"distance_m", "reprojection_error_px", "converged", "iterations", "time_us"})
+      EXPECT_TRUE(e.contains(key)) << key;
+  }
+  // The sample is 0.450 m away with 0.2 px noise: lm's distance is within
+  // 1 % (five times the 0.2 % that 0.2 px gives at this range).
+  for (const auto& e : j["estimates"]) {
+    const double distance = e["distance_m"];
+    if (e["solver"] == "lm") {
+      EXPECT_NEAR(distance, 0.450, 0.0045);
+    }
+    if (e["solver"] == "ippe") {
+      EXPECT_TRUE(e.contains("ambiguity_ratio"));
+    }
+  }
+}
+
+TEST(RigSolve, TableIsTheDefaultAndReadsStandardInput) {
+  std::ifstream in(kSample);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  const CliRun r = run("solve -", text);
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  EXPECT_NE(r.out.find("hybrid_ekf"), std::string::npos);
+  EXPECT_NE(r.out.find("opencv_sqpnp"), std::string::npos);
+}
+
+TEST(RigSolve, SquareOnlySolversSaySkippedOnSixteenPoints) {
+  auto j = sample();
+  // Four copies of the marker, 7 cm apart, all seen frontally at 0.5 m.
+  nlohmann::json obj = nlohmann::json::array(), img = nlohmann::json::array();
+  for (double cx : {0.0, 0.07})
+    for (double cy : {0.0, 0.07})
+      for (auto [dx, dy] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+        const double x = cx + dx * 0.025, y = cy + dy * 0.025;
+        obj.push_back({x, y, 0.0});
+        img.push_back({706.1 * x / 0.5 + 388.0, 731.1 * y / 0.5 + 269.6});
+      }
+  j["camera"]["dist"] = {0, 0, 0, 0, 0};
+  j["object_points"] = obj;
+  j["image_points"] = img;
+  const CliRun r = run("solve --json -", j.dump());
+  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const auto out = nlohmann::json::parse(r.out);
+  int skipped = 0;
+  for (const auto& e : out["estimates"])
+    if (e.contains("skipped")) {
+      ++skipped;
+      EXPECT_TRUE(e["solver"] == "analytic" || e["solver"] == "opencv_ippe_square") << e.dump();
+    } else {
+      const double distance = e["distance_m"];
+      EXPECT_NEAR(distance, 0.5, 1e-6) << e.dump();  // exact data
+    }
+  EXPECT_EQ(skipped, 2);
+}
+
+void expect_bad_input(const std::string& stdin_text, const std::string& words) {
+  const CliRun r = run("solve -", stdin_text);
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.out.find(words), std::string::npos) << r.out;
+}
+
+TEST(RigSolve, MalformedJsonExitsTwo) {
+  expect_bad_input("{\"camera\": ", "not valid JSON");
+}
+
+TEST(RigSolve, FewerThanFourPointsExitsTwo) {
+  auto j = sample();
+  j["object_points"].erase(3);
+  j["image_points"].erase(3);
+  expect_bad_input(j.dump(), "expected at least 4");
+}
+
+TEST(RigSolve, DifferentCountsExitTwo) {
+  auto j = sample();
+  j["image_points"].erase(3);
+  expect_bad_input(j.dump(), "4 object points but 3 image points");
+}
+
+TEST(RigSolve, NonNumbersAndNonFiniteValuesExitTwo) {
+  auto j = sample();
+  j["image_points"][1][0] = "NaN";
+  expect_bad_input(j.dump(), "image_points[1][0] must be a number");
+  expect_bad_input("{\"camera\": {}, \"object_points\": [], \"image_points\": [[NaN, 1]]}",
+                   "not valid JSON");
+  j = sample();
+  j["camera"]["fx"] = -1;
+  expect_bad_input(j.dump(), "fx and fy must be finite and > 0");
+}
+
+TEST(RigSolve, MissingKeysAreNamed) {
+  auto j = sample();
+  j.erase("camera");
+  expect_bad_input(j.dump(), "key 'camera' (or 'camera_file') is missing");
+  j = sample();
+  j["camera"].erase("width");
+  expect_bad_input(j.dump(), "key 'camera.width' is missing");
+}
+
+TEST(RigSolve, CameraFileIsResolvedNextToTheProblem) {
+  const fs::path dir = fs::temp_directory_path() / ("rig_solve_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "cam.yaml")
+      << "%YAML:1.0\nimage_width: 736\nimage_height: 571\ncamera_matrix: !!opencv-matrix\n"
+         "  rows: 3\n  cols: 3\n  dt: d\n  data: [706.1, 0, 388.0, 0, 731.1, 269.6, 0, 0, 1]\n"
+         "distortion_coefficients: !!opencv-matrix\n  rows: 1\n  cols: 5\n  dt: d\n"
+         "  data: [-0.2279, 0.1479, -0.0007985, 0.0006245, 0]\n";
+  auto j = sample();
+  j.erase("camera");
+  j["camera_file"] = "cam.yaml";
+  std::ofstream(dir / "problem.json") << j.dump();
+  const CliRun ok = run("solve " + (dir / "problem.json").string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.out;
+  j["camera_file"] = "missing.yaml";
+  std::ofstream(dir / "problem.json") << j.dump();
+  const CliRun bad = run("solve " + (dir / "problem.json").string());
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.out.find("missing.yaml': cannot be opened"), std::string::npos) << bad.out;
+  fs::remove_all(dir);
+}
+
+TEST(RigSolve, MissingProblemFileIsNamed) {
+  const CliRun r = run("solve /nonexistent/problem.json");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.out.find("'/nonexistent/problem.json': cannot be opened"), std::string::npos)
+      << r.out;
+}
+
+}  // namespace
