@@ -4,10 +4,8 @@
 #include <toml++/toml.h>
 
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <set>
-#include <sstream>
 #include <utility>
 #include <vector>
 
@@ -181,14 +179,7 @@ void validate(const DriveProfile& p) {
 }
 
 DriveProfile parse_drive_profile(std::string_view text, const std::string& source) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream msg;
-    msg << source << ": line " << e.source().begin.line << ": " << e.description();
-    throw ProfileError(msg.str());
-  }
+  const toml::table root = parse_toml(text, source);
 
   DriveProfile p;
   p.source = source;
@@ -305,11 +296,7 @@ DriveProfile parse_drive_profile(std::string_view text, const std::string& sourc
 }
 
 DriveProfile load_drive_profile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw ProfileError(path + ": cannot open the drive profile");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_drive_profile(text.str(), path);
+  return parse_drive_profile(read_text_file(path, "the drive profile"), path);
 }
 
 }  // namespace motion

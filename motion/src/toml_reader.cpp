@@ -2,10 +2,30 @@
 #include "motion/toml_reader.hpp"
 
 #include <cmath>
+#include <fstream>
+#include <sstream>
 
 #include "motion/errors.hpp"
 
 namespace motion {
+
+toml::table parse_toml(std::string_view text, const std::string& source) {
+  try {
+    return toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream msg;
+    msg << source << ": line " << e.source().begin.line << ": " << e.description();
+    throw ProfileError(msg.str());
+  }
+}
+
+std::string read_text_file(const std::string& path, const std::string& what) {
+  std::ifstream in(path);
+  if (!in) throw ProfileError(path + ": cannot open " + what);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
 
 TomlTableReader::TomlTableReader(const toml::table& root, std::string source, std::string path,
                                  bool optional)

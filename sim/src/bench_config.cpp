@@ -1,10 +1,8 @@
 // Reading the [sim] table of a bench file (see bench_config.hpp).
 #include "sim/bench_config.hpp"
 
-#include <fstream>
 #include <motion/errors.hpp>
 #include <motion/toml_reader.hpp>
-#include <sstream>
 
 namespace sim {
 namespace {
@@ -32,14 +30,7 @@ AxisConfig read_axis(const toml::table& root, const std::string& source, const s
 }  // namespace
 
 BenchSimConfig parse_bench_sim_config(std::string_view text, const std::string& source) {
-  toml::table root;
-  try {
-    root = toml::parse(text, source);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream msg;
-    msg << source << ": line " << e.source().begin.line << ": " << e.description();
-    throw motion::ProfileError(msg.str());
-  }
+  const toml::table root = motion::parse_toml(text, source);
   BenchSimConfig c;
   TomlTableReader r(root, source, "sim", /*optional=*/true);
   c.time_scale = r.positive_or("time_scale", c.time_scale);
@@ -78,11 +69,7 @@ BenchSimConfig parse_bench_sim_config(std::string_view text, const std::string& 
 }
 
 BenchSimConfig load_bench_sim_config(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw motion::ProfileError(path + ": cannot open the bench file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return parse_bench_sim_config(text.str(), path);
+  return parse_bench_sim_config(motion::read_text_file(path, "the bench file"), path);
 }
 
 }  // namespace sim

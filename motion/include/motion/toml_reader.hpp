@@ -10,8 +10,14 @@
 #include <cstdint>
 #include <set>
 #include <string>
+#include <string_view>
 
 namespace motion {
+
+// Parses TOML text. A syntax error throws ProfileError "SOURCE: line N: ...".
+toml::table parse_toml(std::string_view text, const std::string& source);
+// The whole content of a file. Throws ProfileError "PATH: cannot open WHAT".
+std::string read_text_file(const std::string& path, const std::string& what);
 
 class TomlTableReader {
  public:
