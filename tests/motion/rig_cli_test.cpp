@@ -4,10 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <csignal>
+#include <memory>
 #include <motion/drive_profile.hpp>
+#include <motion/errors.hpp>
 #include <motion/modbus_bench.hpp>
 #include <regex>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "child_process.hpp"
 
@@ -50,6 +54,34 @@ TEST(RigSimBench, ExitsCleanlyOnSigint) {
   ChildProcess sim({kRig, "sim", "bench", "--port", "0", "--config", kSim});
   ASSERT_GT(start_sim(sim), 0);
   EXPECT_EQ(sim.signal_and_wait(SIGINT, 2s), 0);
+}
+
+TEST(RigSimBench, KilledAndRestartedMidMoveMakesTheDriverRaise) {
+  // The literal case: the simulated bench's process is SIGKILLed mid-move and
+  // a new one starts on the same port, not homed. The driver must reconnect,
+  // re-read the state and raise rather than report the move as done.
+  auto sim = std::make_unique<ChildProcess>(std::vector<std::string>{
+      kRig, "sim", "bench", "--port", "0", "--config", kSim, "--time-scale", "5"});
+  const int port = start_sim(*sim);
+  ASSERT_GT(port, 0);
+  motion::DriveProfile profile = motion::load_drive_profile(kSim);
+  profile.timing.reconnect_timeout_ms = 3000;  // covers the restart of a process
+  motion::ModbusBench bench(
+      motion::BenchUrl::parse("modbus-tcp://127.0.0.1:" + std::to_string(port)), profile);
+  bench.home();
+  bench.wait_settled(5s);
+  bench.move_to(100, 50);  // 2 s simulated, 0.4 s wall at time scale 5
+  std::this_thread::sleep_for(50ms);
+  EXPECT_EQ(sim->signal_and_wait(SIGKILL, 2s), 128 + SIGKILL);
+  sim = std::make_unique<ChildProcess>(std::vector<std::string>{
+      kRig, "sim", "bench", "--port", std::to_string(port), "--config", kSim});
+  ASSERT_EQ(start_sim(*sim), port);
+  try {
+    bench.wait_settled(5s);
+    FAIL() << "the move was reported settled by a restarted bench";
+  } catch (const motion::BenchLinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("no longer homed"), std::string::npos) << e.what();
+  }
 }
 
 TEST(RigBench, HomesMovesAndReportsTheSimulatedBench) {
