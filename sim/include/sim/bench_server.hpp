@@ -7,7 +7,10 @@
 // Threads: one network thread (a select() loop over the listening socket and
 // the clients, woken by a pipe, so stop() returns promptly) and one physics
 // thread (advances BenchDynamics every millisecond of wall time, times
-// time_scale). Every public member is thread-safe.
+// time_scale). The accessors (positions, written_targets, requests) and the
+// fault controls (inject, set_emergency_stop) are thread-safe and may be
+// called from any thread at any time; start, stop and restart_network belong
+// to the one thread that owns the server.
 //
 // For the simulated camera: actual_position_mm() is where the carriage really
 // is, including the backlash and repeatability error the drive never reports;
