@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
 #include <map>
 #include <motion/errors.hpp>
@@ -78,7 +79,8 @@ TEST_F(Mbpoll, HomesMovesAndReadsBackTheSimulatedBench) {
   mbpoll(port, "-r 4 -t 4 127.0.0.1 -- 50 4");  // reset alarm
   mbpoll(port, "-r 0 -t 4:int -B 127.0.0.1 -- 12345 -4321");
   mbpoll(port, "-r 4 -t 4 127.0.0.1 -- 50 1");
-  ASSERT_TRUE(eventually([&] { return server_->encoder_position_mm().y_mm == -4.321; }, 3s));
+  ASSERT_TRUE(eventually(
+      [&] { return std::fabs(server_->encoder_position_mm().y_mm + 4.321) < 1e-9; }, 3s));
   auto feedback = mbpoll_values(mbpoll(port, "-r 0 -t 3:int -B -c 2 127.0.0.1"));
   EXPECT_EQ(feedback[0], 12345);
   EXPECT_EQ(feedback[2], -4321);
