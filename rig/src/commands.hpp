@@ -35,4 +35,7 @@ void add_bench_command(CLI::App& app, ExitStatus& status);
 // rig sim bench (cmd_sim.cpp).
 void add_sim_command(CLI::App& app, ExitStatus& status);
 
+// rig detect IMAGE... [--camera FILE] [--target FILE] [--json] (cmd_detect.cpp).
+void add_detect_command(CLI::App& app, ExitStatus& status);
+
 }  // namespace rig

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   rig::add_solve_command(app, status);
   rig::add_capture_command(app, status);
   rig::add_marker_command(app, status);
+  rig::add_detect_command(app, status);
   rig::add_target_command(app, status);
   rig::add_bench_command(app, status);
   rig::add_sim_command(app, status);
