@@ -276,6 +276,68 @@ TEST(SceneRenderer, ReadNoiseAddsInQuadrature) {
   expect_noise_matches_model(o);
 }
 
+// Vignetting: gain 1 - v (r / r_corner)^2, so the farthest image corner
+// receives (1 - v) of the centre's irradiance (noise-free, no blur: exact to
+// float rounding, 1e-4 DN).
+TEST(SceneRenderer, VignettingDarkensTheFarthestCornerByItsFactor) {
+  SceneOptions o = geometry_only();
+  o.show_target = false;
+  o.vignetting = 0.25;
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  const cv::Mat irr = r.render_irradiance(vision::Pose(), 1);
+  const auto& k = r.camera().intrinsics();
+  const double flat = dn_of(o.background_reflectance, o);
+  // The principal point (388.0, 269.6) is nearest pixel (388, 270): r = 0.4 px.
+  EXPECT_NEAR(irr.at<float>(270, 388), flat, flat * 0.25 * 1e-5);
+  // The farthest corner from (388.0, 269.6) is the bottom-left (0, 570).
+  ASSERT_GT(std::hypot(k.cx, 570 - k.cy), std::hypot(735 - k.cx, 570 - k.cy));
+  EXPECT_NEAR(irr.at<float>(570, 0), flat * 0.75, 1e-3);
+}
+
+// Lighting: the sheet's irradiance is 1 + g (p . dir); two blank points of the
+// sheet differ by exactly that ratio (no vignetting, noise or blur).
+TEST(SceneRenderer, LightingGradientScalesThePaperAlongItsDirection) {
+  SceneOptions o = geometry_only();
+  o.lighting_gradient_per_m = 0.8;
+  o.lighting_direction_deg = 0;  // along +x of the target
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  const vision::Pose T = pose(0.5, 0, 0, 0);
+  const cv::Mat irr = r.render_irradiance(T, 1);
+  // Blank paper left and right of marker 0, clear of every quiet zone.
+  const Eigen::Vector2d a = r.camera().project(T * Eigen::Vector3d(-0.07, 0.0, 0));
+  const Eigen::Vector2d b = r.camera().project(T * Eigen::Vector3d(0.07, 0.0, 0));
+  const double ia =
+      irr.at<float>(static_cast<int>(std::lround(a.y())), static_cast<int>(std::lround(a.x())));
+  const double ib =
+      irr.at<float>(static_cast<int>(std::lround(b.y())), static_cast<int>(std::lround(b.x())));
+  // Rounding a point to its pixel moves it by <= 0.5 px = 0.35 mm at 0.5 m:
+  // a ratio error of 0.8 * 0.00035 = 3e-4.
+  EXPECT_NEAR(ib / ia, (1 + 0.8 * 0.07) / (1 - 0.8 * 0.07), 1e-3);
+}
+
+// A 4-bit ADC leaves only multiples of 16 DN.
+TEST(SceneRenderer, CoarseAdcQuantizesToItsLevels) {
+  SceneOptions o;
+  o.adc_bits = 4;
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  const cv::Mat image = r.render(pose(0.4, 10, 0, 0), 2).image;
+  int off_level = 0, levels = 0;
+  std::vector<bool> seen(256, false);
+  for (int v = 0; v < image.rows; ++v) {
+    for (int u = 0; u < image.cols; ++u) {
+      const int value = image.at<uint8_t>(v, u);
+      off_level += value % 16 != 0 ? 1 : 0;
+      if (!seen[value]) ++levels;
+      seen[value] = true;
+    }
+  }
+  EXPECT_EQ(off_level, 0);
+  EXPECT_GT(levels, 5);
+}
+
 TEST(SceneRenderer, SameSeedGivesTheSameFrameAndAnotherSeedOtherNoise) {
   const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
                         codebook());
