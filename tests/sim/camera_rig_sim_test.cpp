@@ -1,6 +1,7 @@
 // `rig sim --config FILE` as a process: it prints the bench URL and the
 // camera's id and address, serves frames over GigE Vision, and stops cleanly
 // on SIGTERM.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <poll.h>
 #include <signal.h>
@@ -11,8 +12,11 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <vector>
 
+#include "sim/camera_server.hpp"
 #include "vision/gige_source.hpp"
 
 extern char** environ;
@@ -78,6 +82,60 @@ TEST(RigSim, ServesBenchAndCameraAndStopsOnSigterm) {
   close(out[0]);
   std::filesystem::remove(config);
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+}
+
+}  // namespace
+
+namespace {
+
+// Runs `rig ARGS...` and returns its exit code, stdout and stderr discarded.
+int run_rig(std::vector<std::string> args) {
+  const std::string rig = std::string(RIG_BINARY_DIR) + "/rig/rig";
+  args.insert(args.begin(), rig);
+  std::vector<char*> argv;
+  for (auto& a : args)
+    argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+  pid_t pid = -1;
+  const int spawned = posix_spawn(&pid, rig.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+TEST(RigCapture, SavesTriggeredFramesFromTheSimulatedCamera) {
+  auto renderer = std::make_shared<const sim::SceneRenderer>(
+      vision::Camera::paper_default(), vision::Target::paper_default(), vision::Codebook());
+  sim::CameraServer server(
+      renderer, vision::RigGeometry::load(std::string(RIG_SOURCE_DIR) + "/config/rigs/sim.toml"),
+      [] { return std::make_pair(300.0, 150.0); });
+  server.start();
+  const auto out = std::filesystem::temp_directory_path() / "rig_capture_test";
+  std::filesystem::remove_all(out);
+  EXPECT_EQ(run_rig({"capture", "--camera", "gige:" + server.address(), "--frames", "3", "--out",
+                     out.string()}),
+            0);
+  for (const char* name : {"frame_000000.png", "frame_000001.png", "frame_000002.png"}) {
+    const cv::Mat image = cv::imread((out / name).string(), cv::IMREAD_UNCHANGED);
+    EXPECT_EQ(image.cols, 736) << name;
+    EXPECT_EQ(image.rows, 571) << name;
+  }
+  EXPECT_EQ(server.frames_rendered(), 3u);
+  std::filesystem::remove_all(out);
+}
+
+TEST(RigCapture, MissingCameraExitsOneAndBadSpecExitsTwo) {
+  const std::string out = (std::filesystem::temp_directory_path() / "rig_capture_fail").string();
+  EXPECT_EQ(run_rig({"capture", "--camera", "v4l2:/dev/video97", "--frames", "1", "--out", out}),
+            1);
+  EXPECT_EQ(run_rig({"capture", "--camera", "usb:0", "--frames", "1", "--out", out}), 2);
+  std::filesystem::remove_all(out);
 }
 
 }  // namespace

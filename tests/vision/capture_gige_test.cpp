@@ -119,6 +119,19 @@ TEST_F(GigeFakeCamera, ExposureTimeReachesTheCamera) {
   EXPECT_EQ(ramp_mismatches(source.grab(2000ms), 1.0 + std::log10(2.0)), 0);
 }
 
+TEST_F(GigeFakeCamera, GainReachesTheCamera) {
+  // The simulator has only GainRaw (integer); Aravis sets it for "gain", and a
+  // gain of 1 doubles the ramp (scale = 1 + gain).
+  vision::CaptureOptions options;
+  options.width = 64;
+  options.height = 48;
+  options.gain = 1;
+  vision::GigeSource source(kAddress, options);
+  source.open();
+  source.trigger();
+  EXPECT_EQ(ramp_mismatches(source.grab(2000ms), 2.0), 0);
+}
+
 TEST_F(GigeFakeCamera, EachTriggerDeliversExactlyOneFrame) {
   vision::CaptureOptions options;
   options.width = 320;
