@@ -3,6 +3,7 @@
 // approximation proportional to the perimeter, four vertices, convexity and
 // near-right corner angles.
 #include <algorithm>
+#include <cmath>
 #include <opencv2/imgproc.hpp>
 
 #include "detector_internal.hpp"
@@ -36,9 +37,16 @@ void make_clockwise(Quad* q) {
 
 std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParameters& p,
                                        DetectorStats* stats) {
-  // Step 1: edges. Canny's own 3x3 Sobel; the paper smooths after, not before.
+  // Step 1: Canny's operator, whose first stage is a Gaussian smoothing of
+  // the image (Canny 1986; cv::Canny itself starts at the Sobel gradient).
   cv::Mat edges;
-  cv::Canny(gray, edges, p.canny_low, p.canny_high, 3, false);
+  if (p.canny_sigma_px > 0) {
+    const int k = 2 * static_cast<int>(std::ceil(2.5 * p.canny_sigma_px)) + 1;  // +-2.5 sigma
+    cv::GaussianBlur(gray, edges, cv::Size(k, k), p.canny_sigma_px);
+    cv::Canny(edges, edges, p.canny_low, p.canny_high, 3, false);
+  } else {
+    cv::Canny(gray, edges, p.canny_low, p.canny_high, 3, false);
+  }
   // Step 2: smoothing joins edge pixels a pixel apart (any non-zero pixel is
   // edge for findContours). Step 3: dilation closes the remaining holes.
   if (p.smoothing_kernel_px > 1)

@@ -3,7 +3,8 @@
 // lens distortion.
 //
 // Pipeline (Maidi, Didier, Ababsa, Mallem 2010, §3, steps 1-7 and eq. 30):
-//  1. Canny edges of the grey image [Canny 1986];
+//  1. Canny edges of the grey image (Gaussian smoothing, Sobel gradient,
+//     non-maximum suppression, hysteresis) [Canny 1986];
 //  2. Gaussian smoothing of the edge map, joining nearby edge pixels;
 //  3. dilation, closing the remaining holes between edge segments;
 //  4. contours approximated by polygons with a tolerance proportional to the
@@ -51,15 +52,25 @@ struct DetectorParameters {
   // ---- Candidates: paper §3 steps 1-7 ---------------------------------------
 
   // Canny hysteresis thresholds on the 3x3 Sobel gradient magnitude (L1 norm,
-  // |gx| + |gy|, in grey levels x 8). An edge starts where the gradient
-  // exceeds canny_high and continues while it exceeds canny_low. A black/white
-  // step of contrast C blurred by sigma px peaks near 3.2 C / sigma, so the
-  // defaults find edges of C >= 25 grey levels at sigma = 1.5 px.
+  // |gx| + |gy|, about 8 x grey levels per pixel). An edge starts where the
+  // gradient exceeds canny_high and continues while it exceeds canny_low. A
+  // step of contrast C blurred by sigma px peaks near 3.2 C / sigma, so with
+  // the optics' blur and canny_sigma_px together near 1.2 px the defaults find
+  // edges of C >= 20 grey levels (printed black on white gives 100-200).
   // Lower: fainter or more blurred markers are found, at the cost of more
   // noise edges, more contours and more time. Higher: faster, fewer clutter
   // candidates, but dim, blurred or far markers are lost.
   double canny_low = 25;
   double canny_high = 50;
+
+  // Standard deviation (pixels) of the Gaussian that smooths the image before
+  // the gradient, the first stage of Canny's operator; 0 skips it (OpenCV's
+  // cv::Canny alone). Only the candidates come from the smoothed image; the
+  // sub-pixel sides and the code are read on the original. Larger suppresses
+  // noise edges (fewer broken outlines and spurious contours in noisy images,
+  // hence also less time) but merges the edges of small code cells and blunts
+  // the corners of distant markers.
+  double canny_sigma_px = 0.8;
 
   // Side of the Gaussian kernel that smooths the edge map (paper step 2),
   // pixels, odd; 0 or 1 disables it. Smoothing joins edge pixels that Canny
