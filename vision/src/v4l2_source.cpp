@@ -138,7 +138,11 @@ Frame V4l2Source::grab(std::chrono::milliseconds timeout) {
     const size_t stride = bytes_per_line_ > 0 ? static_cast<size_t>(bytes_per_line_) : row_bytes;
     const bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0 ||
                          buffer.bytesused < stride * static_cast<size_t>(height_ - 1) + row_bytes;
-    const bool stale = stamp_ns < not_before_ns_;
+    // Only a CLOCK_MONOTONIC timestamp compares with trigger()'s clock; a
+    // device with another clock cannot tell stale frames and takes the next.
+    const bool monotonic =
+        (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
+    const bool stale = monotonic && stamp_ns < not_before_ns_;
     Frame frame;
     if (!corrupt && !stale) {
       const auto* data = static_cast<const uint8_t*>(buffers_[buffer.index].start);

@@ -4,7 +4,9 @@
 // V4L2 has no software trigger: the device streams continuously. trigger()
 // records the host's CLOCK_MONOTONIC time and the next grab() drops (counts
 // as discarded) every frame whose exposure timestamp precedes it, so the frame
-// returned was exposed after the trigger (after the bench settled).
+// returned was exposed after the trigger (after the bench settled). Devices
+// whose timestamps are not CLOCK_MONOTONIC cannot be compared: the next frame
+// is taken.
 //
 // Pixel formats: GREY (8 bit), Y16 (16 bit), and YUYV, of which the luma is
 // kept; the device is asked for GREY and its answer decides.
