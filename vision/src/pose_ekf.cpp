@@ -93,38 +93,84 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   const Matrix6d prior_information = prior_ldlt.solve(Matrix6d::Identity());
   const double inv_r = 1.0 / (options.measurement_sigma_px * options.measurement_sigma_px);
 
+  // The update minimises the filter's MAP cost; a Gauss-Newton step that
+  // would raise it (a poor start, or the curved valley between the two planar
+  // poses) is damped Levenberg-Marquardt style instead of taken: the damped
+  // iterated EKF (Bell & Cathey 1993 view the IEKF as Gauss-Newton), same
+  // fixed point and posterior covariance.
+  auto evaluate = [&](const Vector6d& state, Matrix6d* HtH, Vector6d* Htr, double* cost) {
+    double residual_squared = 0;
+    if (!measurement(c, state, HtH, Htr, &residual_squared)) return false;
+    const Vector6d d = state_difference(state, x_prior);
+    *cost = inv_r * residual_squared + d.dot(prior_information * d);
+    return true;
+  };
   Estimate e;
   Vector6d x = x_prior;
   Matrix6d HtH, information = prior_information;
   Vector6d Htr;
-  double residual_squared = 0;
+  double cost = 0, lambda = 1e-6, lambda_growth = 2;
   e.termination = Termination::kMaxIterations;
-  for (int it = 1; it <= options.max_iterations; ++it) {
+  if (!evaluate(x, &HtH, &Htr, &cost)) {
+    e.termination = Termination::kBehindCamera;
+    e.message = "the prior state puts an object point behind the camera";
+  }
+  for (int it = 1; it <= options.max_iterations && e.termination == Termination::kMaxIterations;
+       ++it) {
     e.iterations = it;
-    if (!measurement(c, x, &HtH, &Htr, &residual_squared)) {
-      e.termination = Termination::kBehindCamera;
-      e.message = "the filter state put an object point behind the camera";
-      break;
-    }
     information = prior_information + inv_r * HtH;
     const Vector6d gradient = inv_r * Htr - prior_information * state_difference(x, x_prior);
-    const Vector6d step = information.ldlt().solve(gradient);
+    Matrix6d next_HtH;
+    Vector6d next_Htr, step = Vector6d::Zero();
+    double next_cost = 0;
+    bool accepted = false;
+    while (lambda <= 1e10) {
+      Matrix6d damped = information;
+      damped.diagonal() *= 1.0 + lambda;
+      step = damped.ldlt().solve(gradient);
+      if (!step.allFinite()) break;
+      // Gain ratio of the actual to the predicted decrease of the cost
+      // (the model is cost - 2 s.g + s.I.s); Nielsen's rule (Madsen, Nielsen
+      // & Tingleff 2004, eq. 2.21) sets the damping from it, which stops the
+      // zig-zag of full steps across the curved valley between planar poses.
+      const double predicted = 2 * step.dot(gradient) - step.dot(information * step);
+      if (evaluate(x + step, &next_HtH, &next_Htr, &next_cost) && next_cost <= cost &&
+          predicted > 0) {
+        const double gain = (cost - next_cost) / predicted;
+        if (gain > 0) {
+          accepted = true;
+          lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2 * gain - 1, 3));
+          lambda_growth = 2;
+          break;
+        }
+      }
+      lambda *= lambda_growth;
+      lambda_growth *= 2;
+    }
     if (!step.allFinite()) {
       e.termination = Termination::kNumericalFailure;
       e.message = "the measurement update is singular";
       break;
     }
-    x += step;
-    if (step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
+    if (!accepted && step.allFinite()) step.setZero();
+    if (!accepted || step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
+      // No step lowers the cost any more, or the step is negligible: the
+      // minimum, to rounding.
       e.termination = Termination::kConverged;
+      if (accepted) x += step;
       break;
     }
+    x += step;
+    cost = next_cost;
+    HtH = next_HtH;
+    Htr = next_Htr;
   }
   e.T_cam_target = pose_from_state(x);
   e.covariance = information.ldlt().solve(Matrix6d::Identity());
   if (e.termination == Termination::kConverged) {
     // Consistency gate: a state that explains the corners far worse than the
     // measurement noise allows is a wrong local minimum, not a pose.
+    double residual_squared = 0;
     measurement(c, x, &HtH, &Htr, &residual_squared);
     const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(c.size())));
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
