@@ -18,6 +18,13 @@ constexpr double kAmbiguousRatio = 0.3;
 
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
+// exp([w]x): the rotation by |w| radians about w (identity for w = 0).
+Eigen::Matrix3d rotation_from_axis_angle(const Eigen::Vector3d& w) {
+  const double angle = w.norm();
+  if (angle == 0) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+}
+
 // Squared reprojection error (px^2) and, when wanted, the Gauss-Newton system
 // J^T J and J^T r for the parameters (rotation increment w, translation t) of
 // p_cam = exp([w]x) R P + t.
@@ -75,11 +82,7 @@ Estimate refine_lm(const Correspondences& c, const Pose& start, const LmOptions&
       e.message = "the damped normal equations are singular";
       break;
     }
-    const Pose candidate{
-        Eigen::AngleAxisd(step.head<3>().norm(), step.head<3>().normalized()).toRotationMatrix() *
-            T.R,
-        T.t + step.tail<3>()};
-    const Pose next = step.head<3>().norm() > 0 ? candidate : Pose{T.R, T.t + step.tail<3>()};
+    const Pose next{rotation_from_axis_angle(step.head<3>()) * T.R, T.t + step.tail<3>()};
     Matrix6d JtJ_next;
     Vector6d Jtr_next;
     const double next_cost = reprojection_system(c, next, &JtJ_next, &Jtr_next);
