@@ -1,0 +1,29 @@
+#pragma once
+// db::Store's state, shared by store_runs.cpp and store_positions.cpp (private to db).
+
+#include <memory>
+
+#include "sqlite.hpp"
+
+namespace db {
+
+struct Store::Impl {
+  explicit Impl(const std::string& path);
+  sqlite::Connection connection;
+  // The statements of append_position, prepared once: a position of two
+  // frames with every solver is about a hundred inserts.
+  sqlite::Statement run_state;
+  sqlite::Statement insert_position;
+  sqlite::Statement insert_stage;
+  sqlite::Statement insert_frame;
+  sqlite::Statement insert_detection;
+  sqlite::Statement insert_estimate;
+
+  void prepare_writers();
+  // status and plan_size of a run; throws StoreError naming the run if absent.
+  std::pair<RunStatus, std::int64_t> run_state_of(std::int64_t run_id);
+};
+
+RunStatus run_status_from_text(const std::string& path, const std::string& text);
+
+}  // namespace db
