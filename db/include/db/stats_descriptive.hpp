@@ -1,0 +1,108 @@
+// Descriptive statistics for the report tables: mean, unbiased variance and
+// standard deviation (paper Tables 2, 3, 6), percentiles, and summaries per
+// distance class (paper Fig. 11: ten equal-width classes over [0.10, 1.00] m).
+#pragma once
+
+#include <cstddef>
+#include <limits>
+#include <optional>
+#include <vector>
+
+namespace db::stats {
+
+// Count, mean, unbiased variance (divisor n - 1), standard deviation, range.
+// variance and sd are quiet NaN when count < 2 (undefined, not zero); mean,
+// min and max are NaN when count == 0. Units: those of the values (variance
+// in units squared).
+struct Summary {
+  std::size_t count = 0;
+  double mean = std::numeric_limits<double>::quiet_NaN();
+  double variance = std::numeric_limits<double>::quiet_NaN();
+  double sd = std::numeric_limits<double>::quiet_NaN();
+  double min = std::numeric_limits<double>::quiet_NaN();
+  double max = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Two-pass summary (mean with a correction pass, then the centred sum of
+// squares), accurate even when the mean is large against the spread.
+// Preconditions: every value finite; throws StatsError otherwise. An empty
+// input gives count 0 and NaN figures.
+Summary summarize(const std::vector<double>& values);
+
+// Streaming summary by Welford's update (Welford, Technometrics 4 (1962)
+// 419), for values read row by row from the database without holding them.
+// add() throws StatsError on a non-finite value.
+class RunningSummary {
+ public:
+  void add(double value);
+  Summary summary() const;
+
+ private:
+  std::size_t count_ = 0;
+  double mean_ = 0.0;
+  double m2_ = 0.0;  // sum of squared deviations from the running mean
+  double min_ = 0.0;
+  double max_ = 0.0;
+};
+
+// Quantile q in [0, 1] by linear interpolation between order statistics:
+// h = (n - 1) q, result x[floor h] + (h - floor h) (x[floor h + 1] - x[floor h])
+// on the sorted values; type 7 of Hyndman & Fan, "Sample quantiles in
+// statistical packages", Am. Stat. 50 (1996) 361, the default of R and numpy.
+// q = 0.5 is the median; quantile(v, 0.95) the 95th percentile.
+// Preconditions: values non-empty and finite, 0 <= q <= 1; throws StatsError.
+double quantile(std::vector<double> values, double q);
+
+// Several quantiles of the same values with one sort (same definition).
+std::vector<double> quantiles(std::vector<double> values, const std::vector<double>& qs);
+
+// N equal-width classes over [lower, upper], e.g. the paper's ten distance
+// classes over [0.10, 1.00] m. Edge rule: class i is [edge(i), edge(i+1)),
+// so a value on an inner edge belongs to the upper class, and the last class
+// is closed, [edge(N-1), upper], so `upper` itself is in class N-1. Values
+// within 1e-12 of the range width of an edge count as on it: a distance
+// computed by another route (0.10 + 4 * 0.09 is 0.45999999999999996, the
+// literal 0.46 is not) must not change class on a rounding error, and 1e-12
+// of a 0.9 m range is 0.9 pm, far below any bench resolution.
+class EqualWidthBins {
+ public:
+  // Preconditions: lower < upper, both finite, count >= 1; throws StatsError.
+  EqualWidthBins(double lower, double upper, std::size_t count);
+
+  std::size_t count() const { return count_; }
+  double lower() const { return lower_; }
+  double upper() const { return upper_; }
+  // Edge i in [0, count]: lower + i (upper - lower) / count; edge(count) == upper.
+  double edge(std::size_t i) const;
+  double centre(std::size_t i) const { return 0.5 * (edge(i) + edge(i + 1)); }
+  // The class of value, or nullopt when it is outside [lower, upper] or NaN.
+  std::optional<std::size_t> index_of(double value) const;
+
+ private:
+  double lower_;
+  double upper_;
+  std::size_t count_;
+  double tolerance_;
+};
+
+// One class of a binned summary: its edges and the summary of the values whose
+// key fell in it.
+struct ClassSummary {
+  double lower = 0.0;
+  double upper = 0.0;
+  Summary summary;
+};
+
+struct BinnedSummary {
+  std::vector<ClassSummary> classes;  // bins.count() entries, empty classes included
+  std::size_t outside = 0;            // keys outside [lower, upper]
+};
+
+// Per-class summary of values[i] by the class of keys[i] (e.g. keys = true
+// distance in m, values = distance error in m).
+// Preconditions: keys.size() == values.size(), keys not NaN, values finite;
+// throws StatsError.
+BinnedSummary summarize_by_class(const EqualWidthBins& bins, const std::vector<double>& keys,
+                                 const std::vector<double>& values);
+
+}  // namespace db::stats
