@@ -22,6 +22,9 @@ Connection::~Connection() {
 void Connection::fail(int code, std::string_view what) const {
   std::string message = path_ + ": " + std::string(what) + ": " + sqlite3_errmsg(db_);
   if ((code & 0xff) == SQLITE_CONSTRAINT) throw ConstraintError(message, code);
+  if ((code & 0xff) == SQLITE_BUSY) {
+    message += " (another connection held the write lock for longer than busy_timeout_ms)";
+  }
   throw StoreError(message);
 }
 

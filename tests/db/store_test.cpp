@@ -4,6 +4,7 @@
 #include "db/store.hpp"
 
 #include <gtest/gtest.h>
+#include <sqlite3.h>
 
 #include <regex>
 #include <string>
@@ -210,6 +211,39 @@ TEST_F(StoreTest, ListsRunsOldestFirst) {
   EXPECT_EQ(runs[1].id, b);
   EXPECT_EQ(runs[1].description.plan_size, 2);
   EXPECT_THROW(store_.run(b + 1), db::StoreError);
+}
+
+TEST_F(StoreTest, ASecondStoreOnTheFileSeesEachCommittedPosition) {
+  const std::int64_t run = store_.start_run(make_run_description(5));
+  db::Store reader(dir_.file("runs.db"));
+  EXPECT_EQ(reader.first_incomplete_position(run), 0);
+  store_.append_position(run, make_position(0));
+  EXPECT_EQ(reader.first_incomplete_position(run), 1);
+  EXPECT_EQ(reader.position(run, 0), make_position(0));
+}
+
+TEST_F(StoreTest, FailsAnAppendWhileAnotherConnectionHoldsTheWriteLock) {
+  const std::int64_t run = store_.start_run(make_run_description(5));
+  db::StoreOptions impatient;
+  impatient.busy_timeout_ms = 0;  // fail at once instead of waiting for the lock
+  db::Store second(dir_.file("runs.db"), impatient);
+  {
+    // store_ takes the write lock inside append_position; hold it from here
+    // with a raw connection instead.
+    sqlite3* raw = nullptr;
+    ASSERT_EQ(sqlite3_open(dir_.file("runs.db").c_str(), &raw), SQLITE_OK);
+    ASSERT_EQ(sqlite3_exec(raw, "BEGIN IMMEDIATE", nullptr, nullptr, nullptr), SQLITE_OK);
+    try {
+      second.append_position(run, make_position(0));
+      ADD_FAILURE() << "append succeeded without the write lock";
+    } catch (const db::StoreError& e) {
+      EXPECT_NE(std::string(e.what()).find("locked"), std::string::npos) << e.what();
+    }
+    sqlite3_exec(raw, "ROLLBACK", nullptr, nullptr, nullptr);
+    sqlite3_close(raw);
+  }
+  second.append_position(run, make_position(0));  // the lock is free again
+  EXPECT_EQ(store_.completed_position_indices(run), std::vector<std::int64_t>{0});
 }
 
 }  // namespace
