@@ -104,7 +104,7 @@ TEST(DriveProfile, UnknownWordOrderIsRefused) {
 }
 
 TEST(DriveProfile, EmptySoftLimitsAreRefused) {
-  EXPECT_EQ(error_of(sim_with("x_max_mm = 500", "x_max_mm = -1")),
+  EXPECT_EQ(error_of(sim_with("x_max_mm = 900", "x_max_mm = -1")),
             "p.toml: soft_limits.x_max_mm: must be > x_min_mm");
 }
 

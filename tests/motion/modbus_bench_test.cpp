@@ -43,7 +43,7 @@ TEST_F(ModbusBench, MoveOutsideSoftLimitsIsRefusedAndNothingIsSent) {
   auto bench = homed_bench();
   const auto requests = server_->requests();
   const auto written = server_->written_targets().size();
-  EXPECT_THROW(bench->move_to(500.001, 10), motion::SoftLimitError);
+  EXPECT_THROW(bench->move_to(900.001, 10), motion::SoftLimitError);
   EXPECT_THROW(bench->move_to(10, -0.001), motion::SoftLimitError);
   EXPECT_THROW(bench->move_to(std::nan(""), 10), motion::SoftLimitError);
   EXPECT_THROW(bench->move_to(10, INFINITY), motion::SoftLimitError);
@@ -54,11 +54,11 @@ TEST_F(ModbusBench, MoveOutsideSoftLimitsIsRefusedAndNothingIsSent) {
 TEST_F(ModbusBench, SoftLimitErrorNamesTargetAndLimits) {
   auto bench = homed_bench();
   try {
-    bench->move_to(600, 10);
+    bench->move_to(1000, 10);
     FAIL();
   } catch (const motion::SoftLimitError& e) {
-    EXPECT_NE(std::string(e.what()).find("move to (600, 10) mm refused, nothing sent: outside the "
-                                         "soft limits x [0, 500], y [0, 300] mm"),
+    EXPECT_NE(std::string(e.what()).find("move to (1000, 10) mm refused, nothing sent: outside the "
+                                         "soft limits x [0, 900], y [0, 300] mm"),
               std::string::npos)
         << e.what();
   }

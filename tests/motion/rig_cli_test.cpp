@@ -102,7 +102,7 @@ TEST(RigBench, MoveOutsideTheSoftLimitsExitsWithBadInput) {
   ChildProcess sim({kRig, "sim", "bench", "--port", "0", "--config", kSim, "--time-scale", "20"});
   const int port = start_sim(sim);
   int status = -1;
-  const std::string out = rig_bench("move 600 0", port, &status);
+  const std::string out = rig_bench("move 1000 0", port, &status);
   EXPECT_EQ(status, 2) << out;
   EXPECT_NE(out.find("refused, nothing sent"), std::string::npos) << out;
 }

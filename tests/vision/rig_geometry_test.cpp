@@ -36,12 +36,12 @@ TEST(RigGeometry, MisalignmentTurnsTheViewByItsAngle) {
               1e-12);  // a rotation about the optical centre keeps the distance
 }
 
-TEST(RigGeometry, ShippedSimRigSpansTenToSixtyCentimetresOverTheXTravel) {
+TEST(RigGeometry, ShippedSimRigSpansThePapersTenToHundredCentimetresOverTheXTravel) {
   const auto g = vision::RigGeometry::load(std::string(RIG_SOURCE_DIR) + "/config/rigs/sim.toml");
-  EXPECT_NEAR(g.distance_m(0, 150), 0.60, 1e-9);
-  EXPECT_NEAR(g.distance_m(500, 150), 0.10, 1e-9);
+  EXPECT_NEAR(g.distance_m(0, 150), 1.00, 1e-9);
+  EXPECT_NEAR(g.distance_m(900, 150), 0.10, 1e-9);
   // The target faces the camera within the configured few degrees.
-  EXPECT_LT(vision::rotation_angle_between(g.T_cam_target(250, 150).R, Eigen::Matrix3d::Identity()),
+  EXPECT_LT(vision::rotation_angle_between(g.T_cam_target(450, 150).R, Eigen::Matrix3d::Identity()),
             3.0 * kPi / 180);
 }
 
