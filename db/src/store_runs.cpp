@@ -48,6 +48,10 @@ RunStatus run_status_from_text(const std::string& path, const std::string& text)
   throw StoreError(path + ": unknown run status \"" + text + "\" in table runs");
 }
 
+std::string sqlite_library_version() {
+  return sqlite3_libversion();
+}
+
 Store::Impl::Impl(const std::string& path)
     : connection(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) {}
 

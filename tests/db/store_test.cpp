@@ -202,6 +202,12 @@ TEST_F(StoreTest, ResumesAnAbortedRunButNotACompletedOne) {
   EXPECT_THROW(store_.resume_run(run), db::StoreError);
 }
 
+TEST(SqliteLibraryVersion, IsTheVersionOfTheLinkedLibrary) {
+  // The header's version and the linked library's agree on Debian 12; both
+  // are "3.x.y".
+  EXPECT_EQ(db::sqlite_library_version(), SQLITE_VERSION);
+}
+
 TEST_F(StoreTest, ListsRunsOldestFirst) {
   const std::int64_t a = store_.start_run(make_run_description(1));
   const std::int64_t b = store_.start_run(make_run_description(2));

@@ -65,6 +65,10 @@ struct StoreOptions {
   bool durable_commits = true;
 };
 
+// Version of the SQLite library linked into this program ("3.40.1"), for a
+// run's library_versions_json: rig does not see SQLite itself.
+std::string sqlite_library_version();
+
 class Store {
  public:
   // Schema version this code creates and reads (the number of migrations).
