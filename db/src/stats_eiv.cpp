@@ -1,6 +1,7 @@
 #include "db/stats_eiv.hpp"
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 #include "stats_check.hpp"
@@ -13,7 +14,9 @@ namespace {
 // (q = Syy - delta Sxx) has roots whose product is -delta; when q < 0 the
 // textbook form (q + D) / (2 Sxy) cancels catastrophically for large delta,
 // so the other root's reciprocal, 2 delta Sxy / (D - q), is used there.
+// Sxy = 0 (possible only in a leave-one-out subset) has no Deming slope.
 double deming_slope(double sxx, double syy, double sxy, double delta) {
+  if (sxy == 0.0) return std::numeric_limits<double>::quiet_NaN();
   const double q = syy - delta * sxx;
   const double d = std::sqrt(q * q + 4.0 * delta * sxy * sxy);
   return q >= 0.0 ? (q + d) / (2.0 * sxy) : 2.0 * delta * sxy / (d - q);

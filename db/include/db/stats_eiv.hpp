@@ -41,13 +41,18 @@ struct EivFit {
 };
 
 // Deming regression with error-variance ratio delta = var(y error) / var(x
-// error) (> 0, finite). Standard errors by the delete-one jackknife, as in
-// Linnet's method-comparison work (Stat. Med. 9 (1990) 1463), because it
-// needs neither normal errors nor a large-sample formula: se^2 = (n-1)/n * sum (theta_(i) - mean
-// theta_(.))^2 over the n leave-one-out fits. The leave-one-out sums are down-dated in O(1) each,
-// so the whole fit is O(n). Preconditions: x.size() == y.size() >= 3, all finite, Sxy != 0 (a line
-// with zero covariance has no defined Deming slope), delta > 0 and finite. Throws StatsError
-// otherwise.
+// error) (> 0, finite).
+// Standard errors by the delete-one jackknife, as in Linnet's
+// method-comparison work (Stat. Med. 9 (1990) 1463), because it needs neither
+// normal errors nor a large-sample formula:
+//     se^2 = (n-1)/n * sum_i (theta_(i) - mean theta_(.))^2
+// over the n leave-one-out fits. The leave-one-out sums are down-dated in
+// O(1) each, so the whole fit is O(n). If leaving one point out makes Sxy
+// vanish, that subset has no Deming slope and the standard errors are not
+// finite.
+// Preconditions: x.size() == y.size() >= 3, all finite, Sxy != 0 (zero
+// covariance defines no Deming slope), delta > 0 and finite. Throws
+// StatsError otherwise.
 EivFit fit_deming(const std::vector<double>& x, const std::vector<double>& y, double delta);
 
 // York's iteration: stops when |slope change| <= tolerance * |slope|, or
