@@ -20,6 +20,9 @@ struct Store::Impl {
   sqlite::Statement insert_estimate;
 
   void prepare_writers();
+  // The rows of one position, inside append_position's transaction; `where`
+  // prefixes errors. Throws DuplicatePosition if the plan index is taken.
+  void write_rows(std::int64_t run_id, const PositionRecord& p, const std::string& where);
   // status and plan_size of a run; throws StoreError naming the run if absent.
   std::pair<RunStatus, std::int64_t> run_state_of(std::int64_t run_id);
 };

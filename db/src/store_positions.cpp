@@ -5,23 +5,9 @@
 
 namespace db {
 
-void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
-  Impl& s = *impl_;
-  const std::string& path = s.connection.path();
-  // BEGIN IMMEDIATE ... COMMIT around every row of the position: the unit of
-  // atomicity, and also what makes the hundred inserts fast (one journal
-  // write and, with durable_commits, one fsync instead of one per row).
-  sqlite::Transaction transaction(s.connection);
-  const auto [status, plan_size] = s.run_state_of(run_id);
-  const std::string where = path + ": append_position(run " + std::to_string(run_id) +
-                            ", plan index " + std::to_string(p.plan_index) + ")";
-  if (status != RunStatus::kRunning) {
-    throw StoreError(where + ": the run is " + to_string(status) + ", expected running");
-  }
-  if (p.plan_index < 0 || p.plan_index >= plan_size) {
-    throw StoreError(where + ": plan index outside the plan [0, " + std::to_string(plan_size) +
-                     ")");
-  }
+void Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
+                             const std::string& where) {
+  Impl& s = *this;
   try {
     s.insert_position.bind(1, run_id)
         .bind(2, p.plan_index)
@@ -83,6 +69,34 @@ void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
           .bind(23, e.ambiguity_ratio)
           .run();
     }
+  }
+}
+
+void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
+  Impl& s = *impl_;
+  const std::string& path = s.connection.path();
+  // BEGIN IMMEDIATE ... COMMIT around every row of the position: the unit of
+  // atomicity, and also what makes the hundred inserts fast (one journal
+  // write and, with durable_commits, one fsync instead of one per row).
+  sqlite::Transaction transaction(s.connection);
+  const auto [status, plan_size] = s.run_state_of(run_id);
+  const std::string where = path + ": append_position(run " + std::to_string(run_id) +
+                            ", plan index " + std::to_string(p.plan_index) + ")";
+  if (status != RunStatus::kRunning) {
+    throw StoreError(where + ": the run is " + to_string(status) + ", expected running");
+  }
+  if (p.plan_index < 0 || p.plan_index >= plan_size) {
+    throw StoreError(where + ": plan index outside the plan [0, " + std::to_string(plan_size) +
+                     ")");
+  }
+  try {
+    s.write_rows(run_id, p, where);
+  } catch (const DuplicatePosition&) {
+    throw;
+  } catch (const StoreError& e) {
+    // A row the schema rejects (e.g. a rotation outside 0..3): say which
+    // position, and that the transaction rolled all of it back.
+    throw StoreError(where + ": nothing written: " + e.what());
   }
   transaction.commit();
 }
