@@ -120,8 +120,12 @@ SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2
   SideFit out;
   const double exclusion = std::min(p.corner_exclusion_px, 0.2 * length_px);
   const double t0 = exclusion / length_px, t1 = 1 - t0;
+  // The first pass only has to find the edge near the contour: it reads a
+  // quarter of the samples (each over a wider window); later passes use them all.
+  const int max_samples =
+      first_pass ? std::max(6, p.max_edge_samples_per_side / 4) : p.max_edge_samples_per_side;
   const int m = std::clamp(static_cast<int>((t1 - t0) * length_px / p.edge_sample_spacing_px) + 1,
-                           6, p.max_edge_samples_per_side);
+                           6, max_samples);
   const double half = first_pass ? p.edge_search_px : p.edge_refine_px;
   const double margin = p.image_border_margin_px;
   const Eigen::Vector2d dn = n1 - n0;
@@ -189,7 +193,13 @@ SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2
   for (auto& s : samples)
     if (s.valid && s.step < min_step) s.valid = false;
 
-  // Robust line: fit, drop samples off the line, refit.
+  // Robust line: fit, drop samples off the line, refit. The first pass starts
+  // from the contour polygon, whose corners may be a few pixels off, so that
+  // samples near a corner can fall beyond the marker: it only needs a line
+  // through most of the side (support 1/2, residual x 2); the occlusion
+  // criteria apply to the dense, re-centred samples of the later passes.
+  const double max_residual = (first_pass ? 2 : 1) * p.max_sample_residual_px;
+  const double min_support = first_pass ? 0.5 : p.min_edge_support;
   Line line;
   for (int round = 0; round < 3; ++round) {
     if (!fit_line(samples, &line)) return out.status = EdgeFitStatus::kSideNotSupported, out;
@@ -200,8 +210,7 @@ SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2
       if (!s.valid) continue;
       const double t = t0 + (t1 - t0) * k / (m - 1);
       s.jac_normal = camera.distort_jacobian(n0 + t * dn) * line.normal;
-      if (std::abs(residual_px(s, line)) > p.max_sample_residual_px)
-        s.valid = false, changed = true;
+      if (std::abs(residual_px(s, line)) > max_residual) s.valid = false, changed = true;
     }
     if (!changed) break;
   }
@@ -217,7 +226,7 @@ SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2
     }
   }
   const double spacing = (t1 - t0) * length_px / (m - 1);
-  if (valid < p.min_edge_support * m || longest_gap * spacing > p.max_edge_gap_px)
+  if (valid < min_support * m || (!first_pass && longest_gap * spacing > p.max_edge_gap_px))
     return out.status = EdgeFitStatus::kSideNotSupported, out;
 
   out.line = line;
@@ -254,7 +263,7 @@ EdgeFit refine_quad(const cv::Mat& gray, const Camera& camera, const Quad& candi
   double shortest = 1e300;
   for (int i = 0; i < 4; ++i)
     shortest = std::min(shortest, (candidate[(i + 1) % 4] - candidate[i]).norm());
-  const double max_shift = std::max(2.0, std::min(p.max_corner_shift_px, 0.25 * shortest));
+  const double max_shift = std::max(2.0, std::min(p.max_corner_shift_px, 0.3 * shortest));
 
   std::vector<double> profile;
   std::array<Line, 4> lines;

@@ -139,7 +139,7 @@ struct DetectorParameters {
   // side gets. More samples average noise better (the corner error falls as
   // 1/sqrt(samples)) and cost time linearly.
   double edge_sample_spacing_px = 1.0;
-  int max_edge_samples_per_side = 96;
+  int max_edge_samples_per_side = 64;
 
   // Samples closer than this to a corner (pixels along the side) are not
   // used: the blurred corner of the square rounds the edge there. Larger is
@@ -184,11 +184,15 @@ struct DetectorParameters {
   double image_border_margin_px = 1.0;
 
   // A refined corner may move at most this far (pixels) from the candidate
-  // polygon's vertex, and at most a quarter of the candidate's shortest side
-  // (but always 2 px); farther means the fit locked onto another edge, and the
+  // polygon's vertex, and at most 30 % of the candidate's shortest side (but
+  // always 2 px); farther means the fit locked onto another edge, and the
   // candidate is dropped. Must exceed the contour's offset from the edge
-  // (about 2.5 px) plus the polygon approximation error at a corner.
-  double max_corner_shift_px = 6.0;
+  // (about 3.5 px at a corner with the default kernels) plus the polygon
+  // approximation error at a corner (up to a few pixels on small, noisy
+  // outlines). Larger keeps more small markers in noisy images; smaller
+  // rejects wrong locks earlier (the code and quiet-zone checks reject them
+  // later anyway).
+  double max_corner_shift_px = 8.0;
 
   // ---- Identification (eq. 30) ---------------------------------------------
 
