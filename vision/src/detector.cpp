@@ -19,6 +19,8 @@ void require(bool ok, const std::string& name, const std::string& expected) {
 void validate(const DetectorParameters& p) {
   require(p.canny_low >= 0 && p.canny_high >= p.canny_low, "canny_low/canny_high",
           "0 <= canny_low <= canny_high");
+  require(p.candidate_decimation == 1 || p.candidate_decimation == 2, "candidate_decimation",
+          "1 or 2");
   require(p.canny_sigma_px >= 0 && p.canny_sigma_px <= 5, "canny_sigma_px", "in [0, 5]");
   require(p.smoothing_kernel_px >= 0 && (p.smoothing_kernel_px <= 1 || p.smoothing_kernel_px % 2),
           "smoothing_kernel_px", "0, 1 or an odd size");

@@ -39,8 +39,14 @@ std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParame
                                        DetectorStats* stats) {
   // Step 1: Canny's operator, whose first stage is a Gaussian smoothing of
   // the image (Canny 1986; cv::Canny itself starts at the Sobel gradient).
+  // With decimation, cv::pyrDown's 5x5 Gaussian is that stage, and the
+  // candidates are found at half resolution (a quarter of the pixels).
   cv::Mat edges;
-  if (p.canny_sigma_px > 0) {
+  const int d = p.candidate_decimation;
+  if (d == 2) {
+    cv::pyrDown(gray, edges);
+    cv::Canny(edges, edges, p.canny_low, p.canny_high, 3, false);
+  } else if (p.canny_sigma_px > 0) {
     const int k = 2 * static_cast<int>(std::ceil(2.5 * p.canny_sigma_px)) + 1;  // +-2.5 sigma
     cv::GaussianBlur(gray, edges, cv::Size(k, k), p.canny_sigma_px);
     cv::Canny(edges, edges, p.canny_low, p.canny_high, 3, false);
@@ -53,14 +59,17 @@ std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParame
   // the kernel's footprint (its smallest weight, 1/16, gives 16 grey levels):
   // so the two steps are one dilation by their Minkowski sum, a square of
   // smooth + grow - 1 px, at a third of the cost (checked bit for bit on
-  // noisy edge maps).
+  // noisy edge maps). The kernels are in full-resolution pixels; with
+  // decimation the square shrinks by d, rounded up to an odd size.
+  const auto scaled = [d](int k) { return k <= 1 ? 1 : ((k + d - 1) / d) | 1; };
   const int smooth = std::max(p.smoothing_kernel_px, 1), grow = std::max(p.dilation_kernel_px, 1);
   if (smooth > 3) {
-    cv::GaussianBlur(edges, edges, cv::Size(smooth, smooth), 0);
-    if (grow > 1)
-      cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(grow, grow)));
-  } else if (smooth + grow - 1 > 1) {
-    const int k = smooth + grow - 1;
+    cv::GaussianBlur(edges, edges, cv::Size(scaled(smooth), scaled(smooth)), 0);
+    if (scaled(grow) > 1)
+      cv::dilate(edges, edges,
+                 cv::getStructuringElement(cv::MORPH_RECT, cv::Size(scaled(grow), scaled(grow))));
+  } else if (scaled(smooth + grow - 1) > 1) {
+    const int k = scaled(smooth + grow - 1);
     cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
   }
 
@@ -74,14 +83,14 @@ std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParame
   for (const auto& contour : contours) {
     if (contour.size() < 4) continue;
     // Step 4: approximation tolerance proportional to the perimeter.
-    const double perimeter = cv::arcLength(contour, true);
+    const double perimeter = d * cv::arcLength(contour, true);  // full-resolution pixels
     if (perimeter < p.min_perimeter_px || perimeter > max_perimeter) continue;
-    cv::approxPolyDP(contour, approx, p.approx_epsilon_fraction * perimeter, true);
+    cv::approxPolyDP(contour, approx, p.approx_epsilon_fraction * perimeter / d, true);
     // Steps 5-6: four vertices bounding a convex region (four intersecting lines).
     if (approx.size() != 4 || !cv::isContourConvex(approx)) continue;
     Quad q;
     for (int i = 0; i < 4; ++i)
-      q[i] = Eigen::Vector2d(approx[i].x, approx[i].y);
+      q[i] = d * Eigen::Vector2d(approx[i].x, approx[i].y);  // pyrDown: (x, y) -> (2x, 2y)
     double shortest = 1e300;
     for (int i = 0; i < 4; ++i)
       shortest = std::min(shortest, (q[(i + 1) % 4] - q[i]).norm());
