@@ -200,6 +200,36 @@ TEST_F(DetectorRendered, HeavierBlurKeepsDetectionAndCornerAccuracy) {
   EXPECT_EQ(t.false_detections, 0);
 }
 
+// Issue 3 §2: the detector keeps its accuracy when the sheet is cut one
+// quiet-zone cell outside the marker (a marker printed alone with `rig
+// marker`, on a darker background): the paper edge lies one cell (6-60 px)
+// outside the marker's edge, beyond the edge fit's window.
+TEST_F(DetectorRendered, MarkerOnASheetCutAtItsQuietZoneKeepsItsAccuracy) {
+  vision::Target alone;
+  alone.name = "one marker";
+  alone.markers = {vision::TargetMarker{0, 0.05, Eigen::Vector2d::Zero()}};
+  alone.pose_marker_id = 0;
+  const double half = 0.025 + 0.05 / 6 + 1e-4;  // border + one cell of quiet zone (+0.1 mm)
+  alone.sheet_width_m = alone.sheet_height_m = 2 * half;
+  alone.sheet_origin_m = Eigen::Vector2d(-half, -half);
+  alone.quiet_cells = 1;
+  alone.validate();
+  const sim::SceneRenderer renderer(camera_, alone, codebook_);
+  const auto poses = detector_test::sample_poses(camera_, 200, 20);
+  Tally t;
+  for (int i = 0; i < 200; ++i) {
+    const sim::RenderedFrame frame = renderer.render(poses[i], 2000000 + i);
+    tally_frame(frame, poses[i], alone, detector_.detect(frame.image), &t);
+  }
+  ASSERT_GT(t.detectable, 150);
+  EXPECT_GE(static_cast<double>(t.found) / t.detectable, 0.995)
+      << t.found << " of " << t.detectable;
+  for (int c = 0; c < 3; ++c)
+    EXPECT_LE(std::sqrt(t.sum_sq[c] / std::max(t.corners[c], 1)), 0.07)
+        << detector_test::distance_class_name(c);
+  EXPECT_EQ(t.false_detections, 0);
+}
+
 // Candidates at half resolution (the default) or at full resolution (the
 // paper's pipeline literally): the corners come from the same full-image edge
 // fit, so where both find a marker they agree to far below the corner target

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <opencv2/imgproc.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -55,6 +56,8 @@ void validate(const DetectorParameters& p) {
   require(p.min_cell_margin >= 0 && p.min_cell_margin < 0.5, "min_cell_margin", "in [0, 0.5)");
   require(p.max_border_errors >= 0, "max_border_errors", ">= 0");
   require(p.max_bits_corrected >= -1, "max_bits_corrected", ">= -1");
+  require(p.sheet_edge_quiet_cells >= 0 && p.sheet_edge_quiet_cells <= 4, "sheet_edge_quiet_cells",
+          "in [0, 4]");
 }
 
 bool point_in_quad(const detail::Quad& q, const Eigen::Vector2d& x) {
@@ -67,6 +70,27 @@ bool point_in_quad(const detail::Quad& q, const Eigen::Vector2d& x) {
 
 Eigen::Vector2d centroid(const detail::Quad& q) {
   return 0.25 * (q[0] + q[1] + q[2] + q[3]);
+}
+
+// The marker a candidate would hold if the candidate were the edge of a
+// sheet cut `quiet_cells` cells outside it: the inner 6 / (6 + 2 q) of the
+// candidate, mapped through its homography in the undistorted plane (exact
+// under perspective).
+std::optional<detail::Quad> inset_candidate(const detail::Quad& q, const Camera& camera,
+                                            int quiet_cells) {
+  std::array<Eigen::Vector2d, 4> n;
+  for (int i = 0; i < 4; ++i)
+    if (!camera.undistort_point(q[i], &n[i])) return std::nullopt;
+  const Eigen::Matrix3d H = detail::square_homography(n, 1.0);
+  const double f = static_cast<double>(quiet_cells) / (kMarkerCells + 2 * quiet_cells);
+  const Eigen::Vector2d uv[4] = {{f, f}, {1 - f, f}, {1 - f, 1 - f}, {f, 1 - f}};
+  detail::Quad out;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector3d x = H * Eigen::Vector3d(uv[i].x(), uv[i].y(), 1);
+    if (!(x.z() > 0)) return std::nullopt;
+    out[i] = camera.distort_normalized(x.head<2>() / x.z());
+  }
+  return out;
 }
 
 }  // namespace
@@ -136,7 +160,18 @@ std::vector<Detection> Detector::detect(const cv::Mat& image, DetectorStats* sta
       ++s.suppressed;
       continue;
     }
-    const detail::EdgeFit fit = detail::refine_quad(gray, camera_, candidate, parameters_);
+    detail::EdgeFit fit = detail::refine_quad(gray, camera_, candidate, parameters_);
+    if ((fit.status == detail::EdgeFitStatus::kSideNotSupported ||
+         fit.status == detail::EdgeFitStatus::kFitFailed) &&
+        parameters_.sheet_edge_quiet_cells > 0) {
+      // Perhaps the outline of a sheet cut just outside a marker, whose edge
+      // merged with the marker's in the dilated edge map.
+      if (const auto inner =
+              inset_candidate(candidate, camera_, parameters_.sheet_edge_quiet_cells)) {
+        const detail::EdgeFit retry = detail::refine_quad(gray, camera_, *inner, parameters_);
+        if (retry.status == detail::EdgeFitStatus::kOk) fit = retry;
+      }
+    }
     switch (fit.status) {
       case detail::EdgeFitStatus::kOk:
         break;

@@ -15,26 +15,6 @@
 namespace vision::detail {
 namespace {
 
-// H with H * (u, v, 1) ~ (x, y, 1) for the unit-square corners (0,0), (6,0),
-// (6,6), (0,6) and the four normalized corners (DLT with h33 = 1).
-Eigen::Matrix3d square_homography(const std::array<Eigen::Vector2d, 4>& x) {
-  const double s = kMarkerCells;
-  const Eigen::Vector2d uv[4] = {{0, 0}, {s, 0}, {s, s}, {0, s}};
-  Eigen::Matrix<double, 8, 8> a;
-  Eigen::Matrix<double, 8, 1> b;
-  for (int i = 0; i < 4; ++i) {
-    const double u = uv[i].x(), v = uv[i].y(), X = x[i].x(), Y = x[i].y();
-    a.row(2 * i) << u, v, 1, 0, 0, 0, -u * X, -v * X;
-    a.row(2 * i + 1) << 0, 0, 0, u, v, 1, -u * Y, -v * Y;
-    b(2 * i) = X;
-    b(2 * i + 1) = Y;
-  }
-  const Eigen::Matrix<double, 8, 1> h = a.partialPivLu().solve(b);
-  Eigen::Matrix3d H;
-  H << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
-  return H;
-}
-
 class GridReader {
  public:
   GridReader(const cv::Mat& gray, const Camera& camera, const Eigen::Matrix3d& H)
@@ -69,10 +49,28 @@ class GridReader {
 
 }  // namespace
 
+Eigen::Matrix3d square_homography(const std::array<Eigen::Vector2d, 4>& x, double side) {
+  const double s = side;
+  const Eigen::Vector2d uv[4] = {{0, 0}, {s, 0}, {s, s}, {0, s}};
+  Eigen::Matrix<double, 8, 8> a;
+  Eigen::Matrix<double, 8, 1> b;
+  for (int i = 0; i < 4; ++i) {
+    const double u = uv[i].x(), v = uv[i].y(), X = x[i].x(), Y = x[i].y();
+    a.row(2 * i) << u, v, 1, 0, 0, 0, -u * X, -v * X;
+    a.row(2 * i + 1) << 0, 0, 0, u, v, 1, -u * Y, -v * Y;
+    b(2 * i) = X;
+    b(2 * i + 1) = Y;
+  }
+  const Eigen::Matrix<double, 8, 1> h = a.partialPivLu().solve(b);
+  Eigen::Matrix3d H;
+  H << h(0), h(1), h(2), h(3), h(4), h(5), h(6), h(7), 1;
+  return H;
+}
+
 std::optional<Identification> identify(const cv::Mat& gray, const Camera& camera,
                                        const EdgeFit& fit, const Codebook& codebook,
                                        const DetectorParameters& p) {
-  const GridReader grid(gray, camera, square_homography(fit.corners_norm));
+  const GridReader grid(gray, camera, square_homography(fit.corners_norm, kMarkerCells));
   const double f = p.cell_sample_fraction;
 
   // Cells: border (row or column 0 or 5) and code.

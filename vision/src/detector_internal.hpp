@@ -57,6 +57,11 @@ struct EdgeFit {
 EdgeFit refine_quad(const cv::Mat& gray, const Camera& camera, const Quad& candidate,
                     const DetectorParameters& p);
 
+// H with H * (u, v, 1) ~ (x, y, 1) mapping the square [0, side]^2 (corners
+// (0,0), (side,0), (side,side), (0,side)) onto the quadrilateral x (DLT with
+// h33 = 1). In the undistorted normalized plane this is eq. 30 exactly.
+Eigen::Matrix3d square_homography(const std::array<Eigen::Vector2d, 4>& x, double side);
+
 struct Identification {
   int id = -1;
   int rotation = 0;

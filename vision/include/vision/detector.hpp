@@ -214,6 +214,15 @@ struct DetectorParameters {
   // later anyway).
   double max_corner_shift_px = 8.0;
 
+  // A marker printed alone on a sheet cut this many cells outside it (`rig
+  // marker`'s quiet zone) has the sheet's edge so close to its own that the
+  // dilated edges merge and the outline found is the sheet's. When a
+  // candidate's sides fail, the marker is looked for in the candidate's inner
+  // 6 / (6 + 2 x this) part. 0 disables the retry (a little faster on
+  // cluttered images, whose failed candidates are all retried); the retry
+  // cannot create a false detection the code checks would not reject anyway.
+  int sheet_edge_quiet_cells = 1;
+
   // ---- Identification (eq. 30) ---------------------------------------------
 
   // Fraction of a cell's side, centred, over which the cell is averaged (3x3
