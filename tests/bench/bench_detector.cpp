@@ -17,7 +17,8 @@
 // rms_px_mid / rms_px_far (corner RMS in 0.1-0.4, 0.4-0.7, 0.7-1.0 m), and
 // dist_err_pct_<solver> (mean |d - d_true| / d_true in %, pose marker alone,
 // for hybrid_oi, hybrid_ekf and lm on that detector's corners).
-//   build-det/tests/bench/bench_detector --benchmark_counters_tabular=true
+//   scripts/bench bench_detector   (or build/tests/bench/bench_detector
+//                                   --benchmark_counters_tabular=true)
 #include <apriltag/apriltag.h>
 #include <benchmark/benchmark.h>
 
