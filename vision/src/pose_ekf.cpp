@@ -37,9 +37,12 @@ Vector6d state_difference(const Vector6d& a, const Vector6d& b) {
 bool measurement(const Correspondences& c, const Vector6d& x, Matrix6d* HtH, Vector6d* Htr,
                  double* residual_squared) {
   const Intrinsics& k = c.camera->intrinsics();
-  const Eigen::Matrix3d Rz = Eigen::AngleAxisd(x(0), Eigen::Vector3d::UnitZ()).toRotationMatrix();
-  const Eigen::Matrix3d Ry = Eigen::AngleAxisd(x(1), Eigen::Vector3d::UnitY()).toRotationMatrix();
-  const Eigen::Matrix3d Rx = Eigen::AngleAxisd(x(2), Eigen::Vector3d::UnitX()).toRotationMatrix();
+  const double cz = std::cos(x(0)), sz = std::sin(x(0)), cy = std::cos(x(1)), sy = std::sin(x(1)),
+               cx = std::cos(x(2)), sx = std::sin(x(2));
+  Eigen::Matrix3d Rz, Ry, Rx;
+  Rz << cz, -sz, 0, sz, cz, 0, 0, 0, 1;
+  Ry << cy, 0, sy, 0, 1, 0, -sy, 0, cy;
+  Rx << 1, 0, 0, 0, cx, -sx, 0, sx, cx;
   const Eigen::Matrix3d RyRx = Ry * Rx;
   const Eigen::Matrix3d R = Rz * RyRx;
   HtH->setZero();
