@@ -1,39 +1,19 @@
 // `rig solve` as a user runs it: the real binary, real files, exit codes.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "rig_command.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;  // stdout and stderr together
-};
-
-CliRun run(const std::string& args, const std::string& stdin_text = "") {
-  const fs::path input =
-      fs::temp_directory_path() / ("rig_solve_stdin_" + std::to_string(::getpid()));
-  std::ofstream(input) << stdin_text;
-  const std::string cmd =
-      std::string(RIG_BINARY_DIR) + "/rig/rig " + args + " < " + input.string() + " 2>&1";
-  CliRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  fs::remove(input);
-  return r;
-}
+using rig_test::RigRun;
+using rig_test::run_rig;
 
 const std::string kSample = std::string(RIG_SOURCE_DIR) + "/config/problems/paper_marker.json";
 
@@ -43,8 +23,8 @@ nlohmann::json sample() {
 }
 
 TEST(RigSolve, SampleProblemPrintsEverySolverAsJson) {
-  const CliRun r = run("solve --json " + kSample);
-  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const RigRun r = run_rig("solve --json " + kSample);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j["estimates"].size(), 10u);
   for (const auto& e : j["estimates"]) {
@@ -71,8 +51,8 @@ TEST(RigSolve, SampleProblemPrintsEverySolverAsJson) {
 TEST(RigSolve, TableIsTheDefaultAndReadsStandardInput) {
   std::ifstream in(kSample);
   const std::string text((std::istreambuf_iterator<char>(in)), {});
-  const CliRun r = run("solve -", text);
-  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const RigRun r = run_rig("solve -", text);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("hybrid_ekf"), std::string::npos);
   EXPECT_NE(r.out.find("opencv_sqpnp"), std::string::npos);
 }
@@ -91,8 +71,8 @@ TEST(RigSolve, SquareOnlySolversSaySkippedOnSixteenPoints) {
   j["camera"]["dist"] = {0, 0, 0, 0, 0};
   j["object_points"] = obj;
   j["image_points"] = img;
-  const CliRun r = run("solve --json -", j.dump());
-  ASSERT_EQ(r.exit_code, 0) << r.out;
+  const RigRun r = run_rig("solve --json -", j.dump());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto out = nlohmann::json::parse(r.out);
   int skipped = 0;
   for (const auto& e : out["estimates"])
@@ -107,9 +87,9 @@ TEST(RigSolve, SquareOnlySolversSaySkippedOnSixteenPoints) {
 }
 
 void expect_bad_input(const std::string& stdin_text, const std::string& words) {
-  const CliRun r = run("solve -", stdin_text);
-  EXPECT_EQ(r.exit_code, 2) << r.out;
-  EXPECT_NE(r.out.find(words), std::string::npos) << r.out;
+  const RigRun r = run_rig("solve -", stdin_text);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(words), std::string::npos) << r.err;
 }
 
 TEST(RigSolve, MalformedJsonExitsTwo) {
@@ -161,21 +141,21 @@ TEST(RigSolve, CameraFileIsResolvedNextToTheProblem) {
   j.erase("camera");
   j["camera_file"] = "cam.yaml";
   std::ofstream(dir / "problem.json") << j.dump();
-  const CliRun ok = run("solve " + (dir / "problem.json").string());
-  EXPECT_EQ(ok.exit_code, 0) << ok.out;
+  const RigRun ok = run_rig("solve " + (dir / "problem.json").string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
   j["camera_file"] = "missing.yaml";
   std::ofstream(dir / "problem.json") << j.dump();
-  const CliRun bad = run("solve " + (dir / "problem.json").string());
+  const RigRun bad = run_rig("solve " + (dir / "problem.json").string());
   EXPECT_EQ(bad.exit_code, 2);
-  EXPECT_NE(bad.out.find("missing.yaml': cannot be opened"), std::string::npos) << bad.out;
+  EXPECT_NE(bad.err.find("missing.yaml': cannot be opened"), std::string::npos) << bad.err;
   fs::remove_all(dir);
 }
 
 TEST(RigSolve, MissingProblemFileIsNamed) {
-  const CliRun r = run("solve /nonexistent/problem.json");
+  const RigRun r = run_rig("solve /nonexistent/problem.json");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.out.find("'/nonexistent/problem.json': cannot be opened"), std::string::npos)
-      << r.out;
+  EXPECT_NE(r.err.find("'/nonexistent/problem.json': cannot be opened"), std::string::npos)
+      << r.err;
 }
 
 }  // namespace

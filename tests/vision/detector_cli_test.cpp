@@ -1,10 +1,8 @@
 // `rig detect` as a user runs it: the real binary on image files rendered by
 // sim::SceneRenderer, its public JSON shape, and the files it must refuse.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
-#include <array>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +11,7 @@
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 
+#include "rig_command.hpp"
 #include "sim/scene_renderer.hpp"
 #include "vision/solvers.hpp"
 
@@ -20,29 +19,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-  int exit_code = -1;
-  std::string out;  // stdout
-  std::string err;  // stderr
-};
-
-CliRun run(const std::string& args) {
-  const fs::path err_file =
-      fs::temp_directory_path() / ("rig_detect_stderr_" + std::to_string(::getpid()));
-  const std::string cmd =
-      std::string(RIG_BINARY_DIR) + "/rig/rig detect " + args + " 2>" + err_file.string();
-  CliRun r;
-  FILE* pipe = ::popen(cmd.c_str(), "r");
-  std::array<char, 4096> buf;
-  size_t n;
-  while ((n = std::fread(buf.data(), 1, buf.size(), pipe)) > 0)
-    r.out.append(buf.data(), n);
-  const int status = ::pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream in(err_file);
-  r.err.assign(std::istreambuf_iterator<char>(in), {});
-  fs::remove(err_file);
-  return r;
+// `rig detect ARGS`, stdout and stderr apart.
+rig_test::RigRun run(const std::string& args) {
+  return rig_test::run_rig("detect " + args);
 }
 
 std::vector<nlohmann::json> json_lines(const std::string& text) {
@@ -84,7 +63,7 @@ vision::Pose* RigDetect::pose_ = nullptr;
 cv::Mat* RigDetect::image_ = nullptr;
 
 TEST_F(RigDetect, PrintsDetectionsAndEveryEstimateInThePublicJsonShape) {
-  const CliRun r = run("--json " + path("frame.png"));
+  const rig_test::RigRun r = run("--json " + path("frame.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto lines = json_lines(r.out);
   ASSERT_EQ(lines.size(), 1u);
@@ -118,7 +97,7 @@ TEST_F(RigDetect, PrintsDetectionsAndEveryEstimateInThePublicJsonShape) {
 // Corners within ~0.01 px give the distance within 0.01 % at 0.5 m; 0.05 %
 // leaves room for the solver's own tolerance.
 TEST_F(RigDetect, MaximumLikelihoodDistanceMatchesTheRenderedPose) {
-  const CliRun r = run("--json " + path("frame.png"));
+  const rig_test::RigRun r = run("--json " + path("frame.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const double truth = pose_->t.norm();
   int checked = 0;
@@ -144,7 +123,7 @@ TEST_F(RigDetect, BadFilesAreNamedAndTheOtherImagesStillProcessed) {
   for (const auto& b : bad)
     args += " " + path(b);
   args += " " + path("frame.png");
-  const CliRun r = run(args);
+  const rig_test::RigRun r = run(args);
   EXPECT_EQ(r.exit_code, 2);
   const auto lines = json_lines(r.out);
   ASSERT_EQ(lines.size(), bad.size() + 1);
@@ -167,7 +146,7 @@ TEST_F(RigDetect, SixteenBitAndColourImagesAreConverted) {
   cv::cvtColor(*image_, bgr, cv::COLOR_GRAY2BGR);
   cv::imwrite(path("wide.png"), wide);
   cv::imwrite(path("colour.png"), bgr);
-  const CliRun r = run("--json " + path("wide.png") + " " + path("colour.png"));
+  const rig_test::RigRun r = run("--json " + path("wide.png") + " " + path("colour.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const auto& j : json_lines(r.out))
     EXPECT_EQ(j["detections"].size(), 4u) << j["image"];
@@ -175,7 +154,7 @@ TEST_F(RigDetect, SixteenBitAndColourImagesAreConverted) {
 
 TEST_F(RigDetect, ImageOfAnotherSizeThanTheCameraIsRefused) {
   cv::imwrite(path("dot.png"), cv::Mat(1, 1, CV_8U, cv::Scalar(0)));
-  const CliRun r = run(path("dot.png"));
+  const rig_test::RigRun r = run(path("dot.png"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("image '" + path("dot.png") +
                        "': is 1x1 px but the camera calibration is for 736x571 px"),
@@ -184,7 +163,7 @@ TEST_F(RigDetect, ImageOfAnotherSizeThanTheCameraIsRefused) {
 }
 
 TEST_F(RigDetect, TextOutputListsTheMarkersAndTheSolvers) {
-  const CliRun r = run(path("frame.png"));
+  const rig_test::RigRun r = run(path("frame.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find(path("frame.png") + ": 4 markers"), std::string::npos) << r.out;
   for (const auto& name : vision::solver_names())
