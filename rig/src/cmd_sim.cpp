@@ -7,6 +7,7 @@
 #include <memory>
 #include <motion/drive_profile.hpp>
 #include <motion/errors.hpp>
+#include <optional>
 #include <sim/bench_config.hpp>
 #include <sim/bench_server.hpp>
 #include <sim/camera_config.hpp>
@@ -70,29 +71,51 @@ std::unique_ptr<sim::BenchServer> start_bench(const SimBenchOptions& o) {
   return bench;
 }
 
+// Runs `start`; returns nullopt once the simulated rig is up, else the exit
+// code: 2 for a bad configuration file, key or value, 1 for anything else.
+template <typename Start>
+std::optional<int> start_or_exit_code(Start&& start) {
+  auto fail = [](const std::exception& e, int code) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return std::optional<int>(code);
+  };
+  try {
+    start();
+    return std::nullopt;
+  } catch (const motion::ProfileError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::RigConfigError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::TargetError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::CalibrationError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const std::exception& e) {
+    return fail(e, kExitFailure);
+  }
+}
+
+// Serves until SIGINT or SIGTERM, then stops the camera (if any) and the bench.
+int serve_until_signalled(StopSignals& signals, SimRig& rig) {
+  const int sig = signals.wait();
+  std::cout << "rig sim: " << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ", stopping" << std::endl;
+  if (rig.camera) rig.camera->stop();
+  rig.bench->stop();
+  return kExitOk;
+}
+
 int run_until_stopped(const SimBenchOptions& bench_options) {
   StopSignals signals;  // before any server thread exists
   SimRig rig;
-  try {
-    rig.bench = start_bench(bench_options);
-  } catch (const motion::ProfileError& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitFailure;
-  }
-  const int sig = signals.wait();
-  std::cout << "rig sim: " << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ", stopping" << std::endl;
-  rig.bench->stop();
-  return kExitOk;
+  if (auto code = start_or_exit_code([&] { rig.bench = start_bench(bench_options); })) return *code;
+  return serve_until_signalled(signals, rig);
 }
 
 // rig sim --config FILE: the bench and the camera that sees from it.
 int run_rig_until_stopped(const std::string& config_path) {
   StopSignals signals;  // before any server thread exists
   SimRig rig;
-  try {
+  const auto code = start_or_exit_code([&] {
     const sim::SimRigConfig config = sim::load_sim_rig_config(config_path);
     SimBenchOptions bench_options;
     bench_options.config = config.bench_config;
@@ -108,27 +131,9 @@ int run_rig_until_stopped(const std::string& config_path) {
     std::cout << "rig sim camera: serving " << rig.camera->device_id() << " at "
               << rig.camera->address() << " (rig capture --camera gige:" << rig.camera->address()
               << ")" << std::endl;
-  } catch (const motion::ProfileError& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::RigConfigError& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::TargetError& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::CalibrationError& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "rig sim: " << e.what() << "\n";
-    return kExitFailure;
-  }
-  const int sig = signals.wait();
-  std::cout << "rig sim: " << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ", stopping" << std::endl;
-  rig.camera->stop();
-  rig.bench->stop();
-  return kExitOk;
+  });
+  if (code) return *code;
+  return serve_until_signalled(signals, rig);
 }
 
 }  // namespace
