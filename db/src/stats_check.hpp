@@ -48,4 +48,25 @@ inline double accurate_mean(const std::vector<double>& v) {
   return m + correction / n;
 }
 
+// Means and centred second moments of paired samples (two-pass: the sums of
+// products are taken about the accurate means, which keeps NIST's offset
+// datasets exact).
+struct CentredMoments {
+  double mean_x = 0, mean_y = 0;
+  double sxx = 0, syy = 0, sxy = 0;  // sums of dx^2, dy^2, dx dy
+};
+
+inline CentredMoments centred_moments(const std::vector<double>& x, const std::vector<double>& y) {
+  CentredMoments m;
+  m.mean_x = accurate_mean(x);
+  m.mean_y = accurate_mean(y);
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    const double dx = x[i] - m.mean_x, dy = y[i] - m.mean_y;
+    m.sxx += dx * dx;
+    m.syy += dy * dy;
+    m.sxy += dx * dy;
+  }
+  return m;
+}
+
 }  // namespace db::stats::detail

@@ -34,15 +34,9 @@ EivFit fit_deming(const std::vector<double>& x, const std::vector<double>& y, do
     throw StatsError(std::string(kName) + ": delta = " + std::to_string(delta) +
                      "; expected a finite error-variance ratio > 0");
   }
-  const double mx = detail::accurate_mean(x);
-  const double my = detail::accurate_mean(y);
-  double sxx = 0.0, syy = 0.0, sxy = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double dx = x[i] - mx, dy = y[i] - my;
-    sxx += dx * dx;
-    syy += dy * dy;
-    sxy += dx * dy;
-  }
+  const detail::CentredMoments moments = detail::centred_moments(x, y);
+  const double mx = moments.mean_x, my = moments.mean_y;
+  const double sxx = moments.sxx, syy = moments.syy, sxy = moments.sxy;
   if (sxy == 0.0) {
     throw StatsError(std::string(kName) +
                      ": the covariance of x and y is 0; expected correlated data");

@@ -27,15 +27,9 @@ LineFit fit_line(const std::vector<double>& x, const std::vector<double>& y) {
   detail::require_finite(kName, "x", x);
   detail::require_finite(kName, "y", y);
 
-  const double mx = detail::accurate_mean(x);
-  const double my = detail::accurate_mean(y);
-  double sxx = 0.0, sxy = 0.0, syy = 0.0;
-  for (std::size_t i = 0; i < x.size(); ++i) {
-    const double dx = x[i] - mx, dy = y[i] - my;
-    sxx += dx * dx;
-    sxy += dx * dy;
-    syy += dy * dy;
-  }
+  const detail::CentredMoments moments = detail::centred_moments(x, y);
+  const double mx = moments.mean_x, my = moments.mean_y;
+  const double sxx = moments.sxx, syy = moments.syy, sxy = moments.sxy;
   if (!(sxx > 0.0)) {
     throw StatsError(std::string(kName) + ": every x equals " + std::to_string(mx) +
                      "; expected at least two distinct x values");
