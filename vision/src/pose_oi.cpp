@@ -156,9 +156,11 @@ Eigen::Matrix3d mirrored_start(const Correspondences& c, const Pose& T) {
 
 }  // namespace
 
-Estimate orthogonal_iteration(const Correspondences& c, const Eigen::Matrix3d& R_start,
-                              const OiOptions& options, double* object_space_error_out) {
-  const OiProblem p = prepare(c);
+namespace {
+
+// OI on prepared constants; see orthogonal_iteration.
+Estimate iterate(const OiProblem& p, const Correspondences& c, const Eigen::Matrix3d& R_start,
+                 const OiOptions& options, double* object_space_error_out) {
   // One OI step (Lu et al. §3.2): absolute orientation between the object
   // points and their projections on the lines of sight, i.e. the rotation
   // nearest to the cross-covariance M(R).
@@ -213,18 +215,25 @@ Estimate orthogonal_iteration(const Correspondences& c, const Eigen::Matrix3d& R
   return e;
 }
 
+}  // namespace
+
+Estimate orthogonal_iteration(const Correspondences& c, const Eigen::Matrix3d& R_start,
+                              const OiOptions& options, double* object_space_error_out) {
+  return iterate(prepare(c), c, R_start, options, object_space_error_out);
+}
+
 namespace {
 
 // OI from `start`, then from the other planar minimum of its result; the lower
 // object-space error wins. Iterations of both runs are counted.
-Estimate oi_with_mirror(const Correspondences& c, const Eigen::Matrix3d& start,
+Estimate oi_with_mirror(const OiProblem& p, const Correspondences& c, const Eigen::Matrix3d& start,
                         const OiOptions& options) {
   double error = 0, mirror_error = 0;
-  Estimate e = orthogonal_iteration(c, start, options, &error);
+  Estimate e = iterate(p, c, start, options, &error);
   const Pose T_cam_plane = e.T_cam_target * c.T_target_plane;
   const Eigen::Matrix3d mirror_R_cam_target =
       mirrored_start(c, T_cam_plane) * c.T_target_plane.R.transpose();
-  Estimate m = orthogonal_iteration(c, mirror_R_cam_target, options, &mirror_error);
+  Estimate m = iterate(p, c, mirror_R_cam_target, options, &mirror_error);
   const int iterations = e.iterations + m.iterations;
   const bool mirror_better = (m.converged || !e.converged) && mirror_error < error &&
                              in_front_of_camera(c, m.T_cam_target);
@@ -236,15 +245,15 @@ Estimate oi_with_mirror(const Correspondences& c, const Eigen::Matrix3d& start,
 }  // namespace
 
 Estimate OiSolver::solve_pose(const Correspondences& c, const SolverHint& hint) const {
-  if (hint.T_cam_target) return oi_with_mirror(c, hint.T_cam_target->R, options_);
+  const OiProblem p = prepare(c);
+  if (hint.T_cam_target) return oi_with_mirror(p, c, hint.T_cam_target->R, options_);
   // Lu et al.'s own start: weak perspective; of its two planar rotations the
   // one with the lower object-space error, then its mirror.
   const auto starts = weak_perspective_rotations(c);
-  const OiProblem p = prepare(c);
   const Eigen::Matrix3d& start =
       error_of(p, starts[0].leftCols<2>()) <= error_of(p, starts[1].leftCols<2>()) ? starts[0]
                                                                                    : starts[1];
-  return oi_with_mirror(c, start * c.T_target_plane.R.transpose(), options_);
+  return oi_with_mirror(p, c, start * c.T_target_plane.R.transpose(), options_);
 }
 
 Estimate HybridOiSolver::solve_pose(const Correspondences& c, const SolverHint& hint) const {
