@@ -38,4 +38,13 @@ void add_sim_command(CLI::App& app, ExitStatus& status);
 // rig detect IMAGE... [--camera FILE] [--target FILE] [--json] (cmd_detect.cpp).
 void add_detect_command(CLI::App& app, ExitStatus& status);
 
+// rig sweep SWEEP.toml [--db FILE] [--resume RUN] [--replay RUN] (cmd_sweep.cpp).
+void add_sweep_command(CLI::App& app, ExitStatus& status);
+// rig monitor [--endpoint E] (cmd_monitor.cpp).
+void add_monitor_command(CLI::App& app, ExitStatus& status);
+// rig ctl status|pause|resume|abort [--endpoint E] (cmd_ctl.cpp).
+void add_ctl_command(CLI::App& app, ExitStatus& status);
+// rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression] --out DIR (cmd_report.cpp).
+void add_report_command(CLI::App& app, ExitStatus& status);
+
 }  // namespace rig

@@ -17,6 +17,10 @@ int main(int argc, char** argv) {
   rig::add_target_command(app, status);
   rig::add_bench_command(app, status);
   rig::add_sim_command(app, status);
+  rig::add_sweep_command(app, status);
+  rig::add_monitor_command(app, status);
+  rig::add_ctl_command(app, status);
+  rig::add_report_command(app, status);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

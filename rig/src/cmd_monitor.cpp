@@ -1,0 +1,17 @@
+// rig monitor: placeholder while it is being written this session.
+#include <iostream>
+
+#include "commands.hpp"
+
+namespace rig {
+
+void add_monitor_command(CLI::App& app, ExitStatus& status) {
+  auto* cmd = app.add_subcommand("monitor", "(being written)");
+  cmd->allow_extras();
+  cmd->callback([&status] {
+    std::cerr << "rig monitor: not built yet\n";
+    status.code = kExitFailure;
+  });
+}
+
+}  // namespace rig
