@@ -14,6 +14,8 @@ namespace {
 //   estimates by run and solver      -> positions(run_id) -> frames(position_id)
 //                                       -> estimates (frame_id, solver)
 //   detections of a frame            -> detections (frame_id)
+//   bounds, visible markers of a position -> PRIMARY KEY (position_id, ...)
+//   events of a run                  -> run_events (run_id, id)
 // Child rows reference their parent with ON DELETE CASCADE so that deleting a
 // run deletes everything measured in it.
 constexpr const char* kMigrations[] = {
@@ -107,6 +109,32 @@ CREATE TABLE estimates (
 );
 CREATE INDEX estimates_by_frame_solver ON estimates (frame_id, solver);
 )sql",
+    // 2: what a report needs beyond the measurements (issue 7 §3) and the
+    // faults of a sweep (issue 6 §4), all written by the controller.
+    R"sql(
+ALTER TABLE positions ADD COLUMN true_viewing_angle_deg REAL;
+CREATE TABLE distance_bounds (
+  position_id INTEGER NOT NULL REFERENCES positions (id) ON DELETE CASCADE,
+  scope TEXT NOT NULL,
+  distance_sd_m_per_px REAL NOT NULL CHECK (distance_sd_m_per_px >= 0),
+  PRIMARY KEY (position_id, scope)
+) WITHOUT ROWID;
+CREATE TABLE visible_markers (
+  position_id INTEGER NOT NULL REFERENCES positions (id) ON DELETE CASCADE,
+  marker_id INTEGER NOT NULL,
+  side_px REAL NOT NULL CHECK (side_px > 0),
+  PRIMARY KEY (position_id, marker_id)
+) WITHOUT ROWID;
+CREATE TABLE run_events (
+  id INTEGER PRIMARY KEY,
+  run_id INTEGER NOT NULL REFERENCES runs (id) ON DELETE CASCADE,
+  at TEXT NOT NULL,
+  plan_index INTEGER,
+  kind TEXT NOT NULL,
+  message TEXT NOT NULL
+);
+CREATE INDEX run_events_by_run ON run_events (run_id, id);
+)sql",
 };
 
 constexpr int kMigrationCount = static_cast<int>(sizeof(kMigrations) / sizeof(kMigrations[0]));
@@ -163,7 +191,22 @@ void open_and_migrate(sqlite::Connection& connection, const StoreOptions& option
   sqlite3_busy_timeout(connection.handle(), options.busy_timeout_ms);
   // Check before anything writes: another program's file must not even be
   // switched to WAL.
-  check_file(connection);
+  const int found = check_file(connection);
+  if (options.read_only) {
+    if (found == 0) {
+      throw SchemaError(connection.path() +
+                        ": an empty file, not a rig run database (written by rig sweep)");
+    }
+    if (found != Store::kSchemaVersion) {
+      throw SchemaError(connection.path() + ": run database schema version " +
+                        std::to_string(found) + " is older than this program's version " +
+                        std::to_string(Store::kSchemaVersion) +
+                        "; it is opened read-only, so it cannot be migrated: open it once with a "
+                        "writing command (rig sweep --resume) or a copy of it");
+    }
+    connection.exec("PRAGMA query_only = ON");
+    return;
+  }
 
   sqlite::Statement wal(connection, "PRAGMA journal_mode = WAL");
   wal.step();

@@ -8,7 +8,7 @@
 namespace db {
 
 struct Store::Impl {
-  explicit Impl(const std::string& path);
+  Impl(const std::string& path, bool read_only);
   sqlite::Connection connection;
   // The statements of append_position, prepared once: a position of two
   // frames with every solver is about a hundred inserts.
@@ -18,6 +18,8 @@ struct Store::Impl {
   sqlite::Statement insert_frame;
   sqlite::Statement insert_detection;
   sqlite::Statement insert_estimate;
+  sqlite::Statement insert_bound;
+  sqlite::Statement insert_visible;
 
   void prepare_writers();
   // The rows of one position, inside append_position's transaction; `where`

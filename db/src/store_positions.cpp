@@ -19,6 +19,7 @@ void Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
         .bind(8, p.settle_time_s)
         .bind(9, std::string_view(to_string(p.status)))
         .bind(10, p.failure_reason)
+        .bind(11, p.true_viewing_angle_deg)
         .run();
   } catch (const sqlite::ConstraintError& e) {
     if (e.extended_code == SQLITE_CONSTRAINT_UNIQUE) {
@@ -27,6 +28,12 @@ void Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
     throw;
   }
   const std::int64_t position_id = s.connection.last_insert_rowid();
+  for (const DistanceBound& b : p.distance_bounds) {
+    s.insert_bound.bind(1, position_id).bind(2, b.scope).bind(3, b.distance_sd_m_per_px).run();
+  }
+  for (const VisibleMarker& m : p.visible_markers) {
+    s.insert_visible.bind(1, position_id).bind(2, m.marker_id).bind(3, m.side_px).run();
+  }
   for (std::size_t i = 0; i < p.stage_times.size(); ++i) {
     s.insert_stage.bind(1, position_id)
         .bind(2, static_cast<std::int64_t>(i))
@@ -128,7 +135,8 @@ namespace {
 
 constexpr const char* kPositionColumns =
     "SELECT id, plan_index, commanded_x_mm, commanded_y_mm, measured_x_mm, measured_y_mm, "
-    "true_distance_m, settle_time_s, status, failure_reason FROM positions ";
+    "true_distance_m, settle_time_s, status, failure_reason, true_viewing_angle_deg "
+    "FROM positions ";
 
 PositionRecord read_position_row(sqlite::Statement& row) {
   PositionRecord p;
@@ -141,15 +149,40 @@ PositionRecord read_position_row(sqlite::Statement& row) {
   p.settle_time_s = row.get_double(7);
   p.status = row.get_text(8) == "ok" ? PositionStatus::kOk : PositionStatus::kFailed;
   p.failure_reason = row.get_text(9);
+  p.true_viewing_angle_deg = row.get_optional_double(10);
   return p;
 }
 
-void read_stage_times(sqlite::Statement& select, std::int64_t position_id, PositionRecord& p) {
-  select.bind(1, position_id);
-  while (select.step())
-    p.stage_times.push_back({select.get_text(0), select.get_double(1)});
-  select.reset();
-}
+// Everything a position has besides its frames, by its row id.
+class PositionDetailsReader {
+ public:
+  explicit PositionDetailsReader(sqlite::Connection& c)
+      : stages_(c, "SELECT stage, seconds FROM stage_times WHERE position_id = ?1 ORDER BY seq"),
+        bounds_(c,
+                "SELECT scope, distance_sd_m_per_px FROM distance_bounds WHERE position_id = ?1 "
+                "ORDER BY scope"),
+        visible_(c,
+                 "SELECT marker_id, side_px FROM visible_markers WHERE position_id = ?1 "
+                 "ORDER BY marker_id") {}
+
+  void read(std::int64_t position_id, PositionRecord& p) {
+    stages_.bind(1, position_id);
+    while (stages_.step())
+      p.stage_times.push_back({stages_.get_text(0), stages_.get_double(1)});
+    stages_.reset();
+    bounds_.bind(1, position_id);
+    while (bounds_.step())
+      p.distance_bounds.push_back({bounds_.get_text(0), bounds_.get_double(1)});
+    bounds_.reset();
+    visible_.bind(1, position_id);
+    while (visible_.step())
+      p.visible_markers.push_back({visible_.get_int(0), visible_.get_double(1)});
+    visible_.reset();
+  }
+
+ private:
+  sqlite::Statement stages_, bounds_, visible_;
+};
 
 constexpr const char* kEstimateColumns =
     "e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, e.r12, e.r20, e.r21, e.r22, e.tx_m, "
@@ -186,12 +219,11 @@ std::vector<PositionRecord> Store::positions(std::int64_t run_id) const {
   try {
     sqlite::Statement select(
         c, std::string(kPositionColumns) + "WHERE run_id = ?1 ORDER BY plan_index");
-    sqlite::Statement stages(
-        c, "SELECT stage, seconds FROM stage_times WHERE position_id = ?1 ORDER BY seq");
+    PositionDetailsReader details(c);
     select.bind(1, run_id);
     while (select.step()) {
       PositionRecord p = read_position_row(select);
-      read_stage_times(stages, select.get_int64(0), p);
+      details.read(select.get_int64(0), p);
       out.push_back(std::move(p));
     }
   } catch (...) {
@@ -216,9 +248,7 @@ PositionRecord Store::position(std::int64_t run_id, std::int64_t plan_index) con
     }
     p = read_position_row(select);
     const std::int64_t position_id = select.get_int64(0);
-    sqlite::Statement stages(
-        c, "SELECT stage, seconds FROM stage_times WHERE position_id = ?1 ORDER BY seq");
-    read_stage_times(stages, position_id, p);
+    PositionDetailsReader(c).read(position_id, p);
 
     sqlite::Statement frames(c,
                              "SELECT id, frame_index, camera_timestamp_ns, host_timestamp_ns, "

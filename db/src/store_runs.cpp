@@ -1,4 +1,5 @@
 // db::Store: opening the file and the runs table (start, finish, resume, read).
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "db/sha256.hpp"
@@ -52,8 +53,21 @@ std::string sqlite_library_version() {
   return sqlite3_libversion();
 }
 
-Store::Impl::Impl(const std::string& path)
-    : connection(path, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) {}
+namespace {
+
+// A report must never create a file where the user mistyped a path.
+const std::string& existing_file(const std::string& path, bool read_only) {
+  if (read_only && !std::filesystem::is_regular_file(path)) {
+    throw StoreError(path + ": no such file; expected a rig run database (written by rig sweep)");
+  }
+  return path;
+}
+
+}  // namespace
+
+Store::Impl::Impl(const std::string& path, bool read_only)
+    : connection(existing_file(path, read_only),
+                 read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE) {}
 
 void Store::Impl::prepare_writers() {
   run_state =
@@ -61,9 +75,16 @@ void Store::Impl::prepare_writers() {
   insert_position = sqlite::Statement(
       connection,
       "INSERT INTO positions (run_id, plan_index, commanded_x_mm, commanded_y_mm, measured_x_mm, "
-      "measured_y_mm, true_distance_m, settle_time_s, status, failure_reason) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10)",
+      "measured_y_mm, true_distance_m, settle_time_s, status, failure_reason, "
+      "true_viewing_angle_deg) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
       true);
+  insert_bound = sqlite::Statement(
+      connection,
+      "INSERT INTO distance_bounds (position_id, scope, distance_sd_m_per_px) VALUES (?1, ?2, ?3)",
+      true);
+  insert_visible = sqlite::Statement(
+      connection,
+      "INSERT INTO visible_markers (position_id, marker_id, side_px) VALUES (?1, ?2, ?3)", true);
   insert_stage = sqlite::Statement(
       connection,
       "INSERT INTO stage_times (position_id, seq, stage, seconds) VALUES (?1, ?2, ?3, ?4)", true);
@@ -99,7 +120,8 @@ std::pair<RunStatus, std::int64_t> Store::Impl::run_state_of(std::int64_t run_id
   return state;
 }
 
-Store::Store(const std::string& path, StoreOptions options) : impl_(std::make_unique<Impl>(path)) {
+Store::Store(const std::string& path, StoreOptions options)
+    : impl_(std::make_unique<Impl>(path, options.read_only)) {
   schema::open_and_migrate(impl_->connection, options);
   impl_->prepare_writers();
 }
@@ -187,6 +209,37 @@ void Store::resume_run(std::int64_t run_id) {
                            "ended_at = NULL WHERE id = ?1");
   update.bind(1, run_id).run();
   transaction.commit();
+}
+
+void Store::record_event(std::int64_t run_id, const std::string& kind, const std::string& message,
+                         std::optional<std::int64_t> plan_index) {
+  const std::string& path = impl_->connection.path();
+  if (kind.empty()) {
+    throw StoreError(path + ": record_event(run " + std::to_string(run_id) +
+                     "): kind is empty; expected e.g. \"alarm\" or \"pause\"");
+  }
+  sqlite::Transaction transaction(impl_->connection);
+  impl_->run_state_of(run_id);
+  sqlite::Statement insert(impl_->connection,
+                           std::string("INSERT INTO run_events (run_id, at, plan_index, kind, "
+                                       "message) VALUES (?1, ") +
+                               kNow + ", ?2, ?3, ?4)");
+  insert.bind(1, run_id).bind(2, plan_index).bind(3, kind).bind(4, message).run();
+  transaction.commit();
+}
+
+std::vector<RunEvent> Store::events(std::int64_t run_id) const {
+  impl_->run_state_of(run_id);
+  sqlite::Statement select(impl_->connection,
+                           "SELECT at, plan_index, kind, message FROM run_events "
+                           "WHERE run_id = ?1 ORDER BY id");
+  select.bind(1, run_id);
+  std::vector<RunEvent> events;
+  while (select.step()) {
+    events.push_back(RunEvent{select.get_text(0), select.get_optional_int64(1), select.get_text(2),
+                              select.get_text(3)});
+  }
+  return events;
 }
 
 namespace {

@@ -65,6 +65,10 @@ inline db::PositionRecord make_position(std::int64_t plan_index, int frames = 2,
   p.true_distance_m = 0.5 + 0.001 * k;
   p.settle_time_s = 0.2 + 1e-4 * k;
   p.stage_times = {{"move", 0.5 + k}, {"settle", 0.1}, {"capture", 0.03}, {"store", 1e-3}};
+  p.true_viewing_angle_deg = 3.0 + 0.01 * k;
+  p.distance_bounds = {{"0", 2e-4 + 1e-6 * k}, {"target", 5e-5}};
+  for (int m = 0; m < markers; ++m)
+    p.visible_markers.push_back({m, 40.0 + m + k / 3.0});
   for (int f = 0; f < frames; ++f) {
     db::FrameRecord frame;
     frame.index = f;

@@ -127,3 +127,80 @@ TEST(StoreSchema, RefusesAFileThatCannotBeOpened) {
 }
 
 }  // namespace
+
+namespace {
+
+// A file as schema version 1 wrote it: migration 2's additions removed from a
+// current file, with one position in it.
+std::string make_version1_file(const ScratchDir& dir) {
+  const std::string path = dir.file("v1.db");
+  {
+    db::Store store(path);
+    const std::int64_t run = store.start_run(db_test::make_run_description(4));
+    store.append_position(run, db_test::make_position(0));
+  }
+  RawDb raw(path);
+  raw.exec(
+      "DROP TABLE distance_bounds; DROP TABLE visible_markers; DROP TABLE run_events; "
+      "ALTER TABLE positions DROP COLUMN true_viewing_angle_deg; PRAGMA user_version = 1");
+  return path;
+}
+
+}  // namespace
+
+TEST(StoreSchema, MigratesAVersion1FileKeepingItsPositions) {
+  ScratchDir dir;
+  const std::string path = make_version1_file(dir);
+  db::Store store(path);
+  EXPECT_EQ(RawDb(path).text("PRAGMA user_version"), std::to_string(db::Store::kSchemaVersion));
+  const db::PositionRecord expected = db_test::make_position(0);
+  const db::PositionRecord back = store.position(1, 0);
+  // What version 1 stored is intact; what it could not store is absent.
+  EXPECT_EQ(back.frames, expected.frames);
+  EXPECT_EQ(back.stage_times, expected.stage_times);
+  EXPECT_FALSE(back.true_viewing_angle_deg.has_value());
+  EXPECT_TRUE(back.distance_bounds.empty());
+  EXPECT_TRUE(back.visible_markers.empty());
+  // And the migrated file takes positions with the new fields.
+  store.append_position(1, db_test::make_position(1));
+  EXPECT_EQ(store.position(1, 1), db_test::make_position(1));
+  EXPECT_EQ(RawDb(path).text("PRAGMA integrity_check"), "ok");
+}
+
+TEST(StoreSchema, ReadOnlyNeverCreatesAMissingFile) {
+  ScratchDir dir;
+  const std::string path = dir.file("typo.db");
+  try {
+    db::Store store(path, db::StoreOptions{5000, true, true});
+    FAIL() << "opened a missing file read-only";
+  } catch (const db::StoreError& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": no such file"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(std::ifstream(path).good());
+}
+
+TEST(StoreSchema, ReadOnlyRefusesAnOlderSchemaItCannotMigrate) {
+  ScratchDir dir;
+  const std::string path = make_version1_file(dir);
+  try {
+    db::Store store(path, db::StoreOptions{5000, true, true});
+    FAIL() << "read an old schema read-only";
+  } catch (const db::SchemaError& e) {
+    EXPECT_NE(std::string(e.what()).find("version 1 is older"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(RawDb(path).text("PRAGMA user_version"), "1");
+}
+
+TEST(StoreSchema, ReadOnlyReadsRunsAndRefusesWrites) {
+  ScratchDir dir;
+  const std::string path = dir.file("runs.db");
+  {
+    db::Store store(path);
+    const std::int64_t run = store.start_run(db_test::make_run_description(2));
+    store.append_position(run, db_test::make_position(0));
+  }
+  db::Store reader(path, db::StoreOptions{5000, true, true});
+  EXPECT_EQ(reader.position(1, 0), db_test::make_position(0));
+  EXPECT_THROW(reader.append_position(1, db_test::make_position(1)), db::StoreError);
+  EXPECT_EQ(reader.completed_position_indices(1), std::vector<std::int64_t>{0});
+}

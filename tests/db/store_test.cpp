@@ -260,3 +260,22 @@ TEST_F(StoreTest, FailsAnAppendWhileAnotherConnectionHoldsTheWriteLock) {
 }
 
 }  // namespace
+
+TEST_F(StoreTest, RecordsARunsEventsInOrderWithTheirPositions) {
+  const std::int64_t run = store_.start_run(make_run_description(5));
+  const std::int64_t other = store_.start_run(make_run_description(5));
+  store_.record_event(run, "alarm", "following error (code 2)", 3);
+  store_.record_event(other, "pause", "asked by rig ctl");
+  store_.record_event(run, "resume", "asked by rig ctl");
+  const std::vector<db::RunEvent> events = store_.events(run);
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[0].kind, "alarm");
+  EXPECT_EQ(events[0].plan_index, 3);
+  EXPECT_EQ(events[0].message, "following error (code 2)");
+  EXPECT_EQ(events[1].kind, "resume");
+  EXPECT_FALSE(events[1].plan_index.has_value());
+  EXPECT_LE(events[0].at, events[1].at);  // ISO 8601 sorts as time
+  EXPECT_EQ(store_.events(other).size(), 1u);
+  EXPECT_THROW(store_.record_event(run, "", "no kind"), db::StoreError);
+  EXPECT_THROW(store_.record_event(99, "alarm", "no such run"), db::StoreError);
+}

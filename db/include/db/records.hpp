@@ -109,6 +109,42 @@ struct FrameRecord {
   bool operator==(const FrameRecord& o) const;
 };
 
+// The Cramér-Rao bound on the standard deviation of the estimated distance
+// at the true pose, for one scope ("target" or a marker id as in
+// EstimateRecord::scope), metres per pixel of isotropic corner noise: with
+// corner noise sigma px no unbiased solver's distance has a standard deviation
+// below sigma * distance_sd_m_per_px.
+struct DistanceBound {
+  std::string scope;
+  double distance_sd_m_per_px = 0;
+  bool operator==(const DistanceBound& o) const {
+    return scope == o.scope && distance_sd_m_per_px == o.distance_sd_m_per_px;
+  }
+};
+
+// A marker whose four corners project inside the image at the true pose: the
+// detector should have found it. side_px is its mean projected side length.
+struct VisibleMarker {
+  int marker_id = -1;
+  double side_px = 0;
+  bool operator==(const VisibleMarker& o) const {
+    return marker_id == o.marker_id && side_px == o.side_px;
+  }
+};
+
+// Something that happened to a run besides its positions: a fault, a pause,
+// a resume. Kinds written by rig: "alarm", "link", "camera", "signal",
+// "pause", "resume", "abort", "start", "config".
+struct RunEvent {
+  std::string at;                          // UTC, ISO 8601 with milliseconds, set by the store
+  std::optional<std::int64_t> plan_index;  // the position it happened at, if any
+  std::string kind;
+  std::string message;
+  bool operator==(const RunEvent& o) const {
+    return at == o.at && plan_index == o.plan_index && kind == o.kind && message == o.message;
+  }
+};
+
 // Everything measured at one plan position; Store::append_position writes it
 // in one transaction.
 struct PositionRecord {
@@ -119,6 +155,11 @@ struct PositionRecord {
   // From the read-back and the rig geometry, metres; absent when unknown.
   std::optional<double> true_distance_m;
   double settle_time_s = 0;  // from move command to settled, seconds
+  // Angle between the target's normal and the line of sight from the target
+  // origin to the camera at the true pose, degrees; absent when unknown.
+  std::optional<double> true_viewing_angle_deg;
+  std::vector<DistanceBound> distance_bounds;  // per scope, at the true pose
+  std::vector<VisibleMarker> visible_markers;  // at the true pose, by marker id
   PositionStatus status = PositionStatus::kOk;
   std::string failure_reason;  // empty when status is kOk
   std::vector<StageTime> stage_times;

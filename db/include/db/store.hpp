@@ -63,6 +63,11 @@ struct StoreOptions {
   // power loss (WAL) but the last positions may be rolled back and are then
   // measured again on resume; a crash of the process alone loses nothing either way.
   bool durable_commits = true;
+  // true: open an existing run database for reading only (a report): never
+  // creates, migrates or writes the file. Throws StoreError if the file does
+  // not exist, SchemaError if it is not a rig database or its schema is not
+  // exactly kSchemaVersion (older files are migrated by any writing open).
+  bool read_only = false;
 };
 
 // Version of the SQLite library linked into this program ("3.40.1"), for a
@@ -72,7 +77,7 @@ std::string sqlite_library_version();
 class Store {
  public:
   // Schema version this code creates and reads (the number of migrations).
-  static constexpr int kSchemaVersion = 1;
+  static constexpr int kSchemaVersion = 2;
   // PRAGMA application_id of a rig run database: "RIGD" in ASCII.
   static constexpr std::int32_t kApplicationId = 0x52494744;
 
@@ -118,13 +123,22 @@ class Store {
   // exist, is not running, or plan_index is outside [0, plan_size).
   void append_position(std::int64_t run_id, const PositionRecord& position);
 
+  // Records a fault, pause or resume of the run (RunEvent kinds), with the
+  // store's clock; its own transaction. Throws StoreError for an unknown run
+  // or an empty kind.
+  void record_event(std::int64_t run_id, const std::string& kind, const std::string& message,
+                    std::optional<std::int64_t> plan_index = std::nullopt);
+  // The run's events, oldest first.
+  std::vector<RunEvent> events(std::int64_t run_id) const;
+
   // Plan indices the run has (ok or failed), ascending.
   std::vector<std::int64_t> completed_position_indices(std::int64_t run_id) const;
   // The smallest plan index in [0, plan_size) that the run does not have;
   // nullopt when every position is stored. Throws StoreError for an unknown run.
   std::optional<std::int64_t> first_incomplete_position(std::int64_t run_id) const;
 
-  // The run's positions by plan index, with stage times but WITHOUT frames
+  // The run's positions by plan index, with stage times, distance bounds and
+  // visible markers but WITHOUT frames
   // (frames is empty): what a report iterates over. Use position() for one
   // position in full.
   std::vector<PositionRecord> positions(std::int64_t run_id) const;
