@@ -9,6 +9,7 @@ namespace db {
 
 struct Store::Impl {
   Impl(const std::string& path, bool read_only);
+  bool record_store_time = false;
   sqlite::Connection connection;
   // The statements of append_position, prepared once: a position of two
   // frames with every solver is about a hundred inserts.
@@ -24,7 +25,8 @@ struct Store::Impl {
   void prepare_writers();
   // The rows of one position, inside append_position's transaction; `where`
   // prefixes errors. Throws DuplicatePosition if the plan index is taken.
-  void write_rows(std::int64_t run_id, const PositionRecord& p, const std::string& where);
+  // Returns the position's row id.
+  std::int64_t write_rows(std::int64_t run_id, const PositionRecord& p, const std::string& where);
   // status and plan_size of a run; throws StoreError naming the run if absent.
   std::pair<RunStatus, std::int64_t> run_state_of(std::int64_t run_id);
 };

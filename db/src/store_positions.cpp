@@ -1,12 +1,14 @@
 // db::Store: positions with their frames, detections and estimates; what a
 // resume and a report read back.
+#include <chrono>
+
 #include "db/store.hpp"
 #include "store_impl.hpp"
 
 namespace db {
 
-void Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
-                             const std::string& where) {
+std::int64_t Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
+                                     const std::string& where) {
   Impl& s = *this;
   try {
     s.insert_position.bind(1, run_id)
@@ -77,6 +79,7 @@ void Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& p,
           .run();
     }
   }
+  return position_id;
 }
 
 void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
@@ -85,6 +88,7 @@ void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
   // BEGIN IMMEDIATE ... COMMIT around every row of the position: the unit of
   // atomicity, and also what makes the hundred inserts fast (one journal
   // write and, with durable_commits, one fsync instead of one per row).
+  const auto start = std::chrono::steady_clock::now();
   sqlite::Transaction transaction(s.connection);
   const auto [status, plan_size] = s.run_state_of(run_id);
   const std::string where = path + ": append_position(run " + std::to_string(run_id) +
@@ -96,14 +100,24 @@ void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
     throw StoreError(where + ": plan index outside the plan [0, " + std::to_string(plan_size) +
                      ")");
   }
+  std::int64_t position_id = 0;
   try {
-    s.write_rows(run_id, p, where);
+    position_id = s.write_rows(run_id, p, where);
   } catch (const DuplicatePosition&) {
     throw;
   } catch (const StoreError& e) {
     // A row the schema rejects (e.g. a rotation outside 0..3): say which
     // position, and that the transaction rolled all of it back.
     throw StoreError(where + ": nothing written: " + e.what());
+  }
+  if (s.record_store_time) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    s.insert_stage.bind(1, position_id)
+        .bind(2, static_cast<std::int64_t>(p.stage_times.size()))
+        .bind(3, std::string_view("store"))
+        .bind(4, seconds)
+        .run();
   }
   transaction.commit();
 }

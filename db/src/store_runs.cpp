@@ -123,6 +123,7 @@ std::pair<RunStatus, std::int64_t> Store::Impl::run_state_of(std::int64_t run_id
 Store::Store(const std::string& path, StoreOptions options)
     : impl_(std::make_unique<Impl>(path, options.read_only)) {
   schema::open_and_migrate(impl_->connection, options);
+  impl_->record_store_time = options.record_store_time;
   impl_->prepare_writers();
 }
 

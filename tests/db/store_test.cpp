@@ -279,3 +279,19 @@ TEST_F(StoreTest, RecordsARunsEventsInOrderWithTheirPositions) {
   EXPECT_THROW(store_.record_event(run, "", "no kind"), db::StoreError);
   EXPECT_THROW(store_.record_event(99, "alarm", "no such run"), db::StoreError);
 }
+
+TEST(StoreTiming, RecordsTheStoresOwnTimeAsTheLastStageWhenAsked) {
+  db_test::ScratchDir dir;
+  db::StoreOptions options;
+  options.record_store_time = true;
+  db::Store store(dir.file("timed.db"), options);
+  const std::int64_t run = store.start_run(make_run_description(1));
+  const db::PositionRecord written = make_position(0);
+  store.append_position(run, written);
+  const db::PositionRecord back = store.position(run, 0);
+  ASSERT_EQ(back.stage_times.size(), written.stage_times.size() + 1);
+  EXPECT_EQ(back.stage_times.back().stage, "store");
+  // Positive (it did work) and below a second (a few dozen inserts of one position).
+  EXPECT_GT(back.stage_times.back().seconds, 0.0);
+  EXPECT_LT(back.stage_times.back().seconds, 1.0);
+}

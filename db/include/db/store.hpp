@@ -68,6 +68,10 @@ struct StoreOptions {
   // not exist, SchemaError if it is not a rig database or its schema is not
   // exactly kSchemaVersion (older files are migrated by any writing open).
   bool read_only = false;
+  // true: append_position stores one more stage time, "store": the seconds
+  // spent writing the position's rows, up to (not including) the commit and
+  // its fsync. A sweep's per-stage times then include the database's share.
+  bool record_store_time = false;
 };
 
 // Version of the SQLite library linked into this program ("3.40.1"), for a
