@@ -1,16 +1,285 @@
-// rig sweep: placeholder while it is being written this session.
+// rig sweep SWEEP.toml: the product's main job (issue 6). Drives the bench
+// through the sweep file's plan, measures every position with every solver
+// and logs it to the run database; --resume continues a run that stopped.
+//
+// Output: on a terminal a progress bar with ETA on stderr; otherwise one line
+// per position on stdout. At the end, a summary that says where the results
+// are and how to resume or report.
+//
+// Exit codes: 0 the run completed; 1 it was aborted or failed (the database
+// holds everything measured; the summary says how to resume); 2 bad input
+// (sweep file, calibration not matching the camera, unknown run).
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
 #include <iostream>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
 
 #include "commands.hpp"
+#include "db/store.hpp"
+#include "motion/bench_url.hpp"
+#include "motion/errors.hpp"
+#include "motion/modbus_bench.hpp"
+#include "rig/controller.hpp"
+#include "rig/progress_view.hpp"
+#include "rig/run_record.hpp"
+#include "rig/sweep_config.hpp"
+#include "rig/telemetry.hpp"
+#include "vision/frame_source.hpp"
 
 namespace rig {
+namespace {
+
+struct SweepArgs {
+  std::string sweep_file;
+  std::string database;
+  std::int64_t resume_run = 0;
+  int wait_subscribers = 0;
+  double wait_subscribers_s = 10;
+  bool no_progress = false;
+};
+
+// SIGINT/SIGTERM: finish the current position, then end the run aborted.
+std::atomic<int> g_signal{0};
+extern "C" void on_stop_signal(int signal) {
+  g_signal.store(signal);
+}
+
+class SignalWatch {
+ public:
+  explicit SignalWatch(ControlState& control) : control_(control) {
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGINT, &action, &old_int_);
+    sigaction(SIGTERM, &action, &old_term_);
+    thread_ = std::thread([this] {
+      while (!done_.load()) {
+        if (const int s = g_signal.exchange(0)) {
+          control_.request_abort(std::string(s == SIGINT ? "SIGINT" : "SIGTERM") + " received");
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      }
+    });
+  }
+  ~SignalWatch() {
+    done_.store(true);
+    thread_.join();
+    sigaction(SIGINT, &old_int_, nullptr);
+    sigaction(SIGTERM, &old_term_, nullptr);
+  }
+
+ private:
+  ControlState& control_;
+  std::atomic<bool> done_{false};
+  std::thread thread_;
+  struct sigaction old_int_ {
+  }, old_term_{};
+};
+
+class BadInput : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// One frame before anything moves: the camera answers, and its image is the
+// size the calibration describes.
+void check_camera(vision::FrameSource& camera, const SweepConfig& config) {
+  camera.trigger();
+  const vision::Frame frame = camera.grab(config.faults.grab_timeout);
+  const vision::Camera& model = config.camera;
+  if (frame.image.cols != model.width_px() || frame.image.rows != model.height_px()) {
+    const std::string calibration = config.camera_calibration_path.empty()
+                                        ? "the built-in paper camera (capture.calibration = \"\")"
+                                        : config.camera_calibration_path;
+    throw BadInput(config.sweep_file + ": capture.calibration: " + calibration + " is for " +
+                   std::to_string(model.width_px()) + "x" + std::to_string(model.height_px()) +
+                   " px but camera " + config.camera_spec + " delivers " +
+                   std::to_string(frame.image.cols) + "x" + std::to_string(frame.image.rows) +
+                   " px; expected the calibration of this camera at this resolution");
+  }
+}
+
+int run_sweep(const SweepArgs& args) {
+  SweepConfig config = load_sweep_config(args.sweep_file);
+  const std::string database = args.database.empty() ? config.database_path : args.database;
+  TelemetryEndpoints endpoints;
+  endpoints.publish = config.telemetry_publish;
+  endpoints.control = config.telemetry_control;
+  endpoints.allow_remote = config.telemetry_allow_remote;
+  validate_endpoints(endpoints);
+
+  // The camera first: a wrong calibration must stop the sweep before the bench moves.
+  std::unique_ptr<vision::FrameSource> camera =
+      vision::make_frame_source(config.camera_spec, config.capture);
+  camera->open();
+  check_camera(*camera, config);
+
+  motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
+  if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
+
+  if (const auto parent = std::filesystem::path(database).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
+  db::StoreOptions store_options;
+  store_options.durable_commits = config.durable_commits;
+  store_options.record_store_time = true;
+  db::Store store(database, store_options);
+
+  SweepPlan plan = config.plan;
+  std::int64_t run_id = 0;
+  if (args.resume_run > 0) {
+    db::Run run;
+    try {
+      run = store.run(args.resume_run);
+    } catch (const db::StoreError& e) {
+      throw BadInput(std::string("--resume ") + std::to_string(args.resume_run) + ": " + e.what());
+    }
+    plan = plan_for_resume(run, config);
+    store.resume_run(run.id);
+    run_id = run.id;
+    store.record_event(run_id, "resume", "rig sweep --resume");
+  } else {
+    run_id = store.start_run(describe_run(config, plan));
+  }
+
+  if (config.home_first) {
+    bench.home();
+    bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
+  }
+
+  ControlState control;
+  TelemetryPublisher publisher(endpoints.publish);
+  std::mutex controller_mutex;
+  Controller* live = nullptr;
+  ControlServer server(endpoints.control, control, [&]() -> nlohmann::json {
+    std::lock_guard<std::mutex> lock(controller_mutex);
+    if (!live) return {{"state", "starting"}, {"run_id", run_id}};
+    return live->status();
+  });
+  if (args.wait_subscribers > 0 &&
+      !publisher.wait_for_subscribers(
+          args.wait_subscribers,
+          std::chrono::milliseconds(static_cast<int>(args.wait_subscribers_s * 1000)))) {
+    std::cerr << "rig sweep: no telemetry subscriber on " << publisher.endpoint() << " within "
+              << args.wait_subscribers_s << " s; going on without\n";
+  }
+
+  Controller controller(config, plan, bench, *camera, store, run_id, control, &publisher);
+  {
+    std::lock_guard<std::mutex> lock(controller_mutex);
+    live = &controller;
+  }
+  const bool terminal = isatty(STDERR_FILENO) && !args.no_progress;
+  ProgressView view;
+  controller.set_observer([&](const nlohmann::json& message) {
+    view.update(message);
+    if (terminal) {
+      std::cerr << "\r" << view.progress_line(100) << std::flush;
+      if (message.value("type", "") == "fault") std::cerr << "\n" << view.describe(message) << "\n";
+    } else if (message.value("type", "") == "position") {
+      std::cout << view.log_line(message) << std::endl;
+    } else {
+      std::cout << view.describe(message) << std::endl;
+    }
+  });
+
+  std::cout << "rig sweep: run " << run_id << " in " << store.path() << ", " << plan.size()
+            << " positions (" << plan.description() << "), telemetry " << publisher.endpoint()
+            << ", control " << server.endpoint() << std::endl;
+  RunOutcome outcome;
+  {
+    SignalWatch signals(control);
+    outcome = controller.run();
+  }
+  {
+    std::lock_guard<std::mutex> lock(controller_mutex);
+    live = nullptr;
+  }
+  if (terminal) std::cerr << "\n";
+  std::cout << "rig sweep: run " << run_id << " " << db::to_string(outcome.status)
+            << (outcome.reason.empty() ? "" : ": " + outcome.reason) << "\n"
+            << "  positions: " << outcome.positions_ok << " ok, " << outcome.positions_failed
+            << " failed in this session; " << outcome.stored_total << " of " << plan.size()
+            << " stored\n"
+            << "  database:  " << store.path() << "\n";
+  if (outcome.status == db::RunStatus::kCompleted) {
+    std::cout << "  report:    rig report " << store.path() << " --run " << run_id
+              << " --out <folder>\n";
+    return kExitOk;
+  }
+  std::cout << "  resume:    rig sweep " << config.sweep_file << " --db " << store.path()
+            << " --resume " << run_id << "\n";
+  return kExitFailure;
+}
+
+}  // namespace
 
 void add_sweep_command(CLI::App& app, ExitStatus& status) {
-  auto* cmd = app.add_subcommand("sweep", "(being written)");
-  cmd->allow_extras();
-  cmd->callback([&status] {
-    std::cerr << "rig sweep: not built yet\n";
-    status.code = kExitFailure;
+  auto args = std::make_shared<SweepArgs>();
+  auto* cmd = app.add_subcommand(
+      "sweep",
+      "Drive the bench through a sweep file's plan; at every position take N frames after the "
+      "bench settled, run every pose solver and log bench position against each solver's "
+      "distance in the run database. Resumable; live telemetry and control over ZeroMQ "
+      "(rig monitor, rig ctl).");
+  cmd->add_option("SWEEP", args->sweep_file, "Sweep file (TOML), e.g. config/sweeps/ci.toml")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--db", args->database,
+                  "Run database (SQLite); default: the sweep file's [database] path");
+  cmd->add_option("--resume", args->resume_run,
+                  "Continue run RUN of the database from its first missing position (the "
+                  "sweep file and the files it names must be those the run started with)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--wait-subscribers", args->wait_subscribers,
+                  "Before the first move, wait for this many telemetry subscribers (rig "
+                  "monitor), so that they see the whole run")
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--wait-subscribers-s", args->wait_subscribers_s,
+                  "How long to wait for them, seconds (then go on without)");
+  cmd->add_flag("--no-progress", args->no_progress, "Log one line per position even on a terminal");
+  cmd->footer(
+      "Example (with `rig sim --config config/sim.toml` running):\n"
+      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db\n"
+      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1");
+  cmd->callback([&status, args] {
+    try {
+      status.code = run_sweep(*args);
+    } catch (const SweepConfigError& e) {
+      std::cerr << "rig sweep: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const PlanError& e) {
+      std::cerr << "rig sweep: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const BadInput& e) {
+      std::cerr << "rig sweep: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const RunMismatch& e) {
+      std::cerr << "rig sweep: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const db::SchemaError& e) {
+      std::cerr << "rig sweep: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const TelemetryError& e) {
+      std::cerr << "rig sweep: telemetry: " << e.what() << "\n";
+      status.code = kExitBadInput;
+    } catch (const vision::CaptureError& e) {
+      std::cerr << "rig sweep: camera: " << e.what() << "\n";
+      status.code = kExitFailure;
+    } catch (const motion::BenchError& e) {
+      std::cerr << "rig sweep: bench: " << e.what() << "\n";
+      status.code = kExitFailure;
+    } catch (const db::StoreError& e) {
+      std::cerr << "rig sweep: database: " << e.what() << "\n";
+      status.code = kExitFailure;
+    }
   });
 }
 
