@@ -483,7 +483,8 @@ SweepConfig load_sweep_config(const std::string& path) {
   // [bench] first: the plan is checked against its profile.
   Section bench = section("bench", true);
   c.bench_url = bench.string("url", kBenchForms);
-  load_named(bench, "url", kBenchForms, [&] { return motion::BenchUrl::parse(c.bench_url); });
+  load_named(bench, "url", "a valid bench URL",
+             [&] { return motion::BenchUrl::parse(c.bench_url); });
   c.bench_profile_path = existing_file(bench, base_dir, "profile", "a drive profile");
   c.bench_profile = load_named(bench, "profile", "a drive profile (motion/drive_profile)",
                                [&] { return motion::load_drive_profile(c.bench_profile_path); });

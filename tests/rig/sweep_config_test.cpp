@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "rig/sweep_plan.hpp"
@@ -141,26 +142,77 @@ TEST(SweepConfigShipped, PaperIsThe1939PositionProtocolOverTheXTravel) {
   EXPECT_EQ(x_max, c.bench_profile.soft_limits.x_max_mm);
 }
 
-TEST(SweepConfigShipped, SmokeIsTwelvePositionsOfTwoFrames) {
+TEST(SweepConfigShipped, SmokeIsTwelvePositionsOfTwoFramesWithDefaultsElsewhere) {
   const SweepConfig c = rig::load_sweep_config(kConfig + "/sweeps/smoke.toml");
   EXPECT_EQ(c.plan.size(), 12u);
   EXPECT_EQ(c.frames_per_position, 2);
+  // No [settle], [telemetry]; most of [capture] and [faults] absent: the documented defaults.
+  EXPECT_EQ(c.settle.timeout.count(), c.bench_profile.timing.settle_timeout_ms);
+  EXPECT_EQ(c.settle.dwell.count(), 0);
+  EXPECT_EQ(c.telemetry_publish, "tcp://127.0.0.1:5556");
+  EXPECT_EQ(c.telemetry_control, "tcp://127.0.0.1:5557");
+  EXPECT_FALSE(c.telemetry_allow_remote);
+  EXPECT_TRUE(c.durable_commits);
+  EXPECT_TRUE(c.home_first);
+  EXPECT_EQ(c.faults.capture_retries, 2);
+  EXPECT_EQ(c.capture.retries, 2);
+  EXPECT_EQ(c.faults.grab_timeout.count(), 2000);
+  EXPECT_EQ(c.faults.max_consecutive_failed_positions, 5);
+  EXPECT_EQ(c.faults.link_retries, 3);
+  EXPECT_EQ(c.capture.pixel_format, "Mono8");
+  EXPECT_TRUE(c.capture.software_trigger);
+  EXPECT_FALSE(c.capture.exposure_us.has_value());
+  EXPECT_FALSE(c.frames_dir.has_value());
+}
+
+TEST(SweepConfigValid, RelativePathsAreResolvedAgainstTheSweepFilesFolder) {
+  const fs::path dir = temp_dir("relative");
+  fs::create_directories(dir / "recorded");
+  std::string text = edit(valid_sweep(), "camera = \"gige:127.0.0.1\"",
+                          "camera = \"replay:recorded\"\nsave_frames = \"frames/run\"");
+  text = edit(text, "speed_mm_s = 100", "speed_mm_s = 100\nhome_first = false");
+  const SweepConfig c = rig::load_sweep_config(write_file(dir / "sweep.toml", text));
+  EXPECT_EQ(c.camera_spec, "replay:" + (dir / "recorded").string());
+  ASSERT_TRUE(c.frames_dir.has_value());
+  EXPECT_EQ(*c.frames_dir, (dir / "frames/run").string());
+  EXPECT_FALSE(c.home_first);
+}
+
+TEST(SweepConfigValid, TheSettleTimeoutCheckUsesTheProfilesSpeedWhenNoneIsGiven) {
+  // Without speed_mm_s the profile's default (50 mm/s) applies: the 100 mm
+  // steps of the grid take at least 2000 ms, so 1500 ms is refused...
+  const fs::path dir = temp_dir("default_speed");
+  std::string text = edit(valid_sweep(), "speed_mm_s = 100\n", "home_first = false\n");
+  const std::string refused = edit(text, "dwell_ms = 0", "timeout_ms = 1500");
+  EXPECT_NE(load_error(write_file(dir / "refused.toml", refused))
+                .find("settle.timeout_ms = 1500: expected a timeout longer than the longest move "
+                      "of the plan: 100 mm from position 0 to position 1 takes at least 2000 ms "
+                      "at 50 mm/s"),
+            std::string::npos);
+  // ... and 2500 ms accepted.
+  const std::string accepted = edit(text, "dwell_ms = 0", "timeout_ms = 2500");
+  EXPECT_EQ(
+      rig::load_sweep_config(write_file(dir / "accepted.toml", accepted)).settle.timeout.count(),
+      2500);
 }
 
 // The shipped plans must give the detector something to detect: at every
-// position the pose marker's four corners project inside the image, with a
-// margin of one marker cell at the closest range so the detector's quiet
-// zone is visible too. Checked on the undistorted (pinhole) image as well,
+// position the pose marker and its quiet zone (one cell, side / 6, of white
+// around the border, which the detector needs) project inside the image.
+// Checked on the distorted image and on the undistorted (pinhole) one,
 // because k1 < 0 folds far off-axis points back into the image.
 TEST(SweepConfigShipped, ThePoseMarkerIsInViewAtEveryPositionOfEveryShippedPlan) {
   for (const char* name : {"ci", "paper", "smoke"}) {
     const SweepConfig c = rig::load_sweep_config(kConfig + "/sweeps/" + name + ".toml");
     const vision::Camera& cam = c.camera;
-    const auto corners = c.target.corners_m(c.target.pose_marker());
+    const vision::TargetMarker& marker = c.target.pose_marker();
+    const Eigen::Vector3d centre(marker.centre_m.x(), marker.centre_m.y(), 0);
+    // Half side s/2 grown by one cell s/6: a factor 4/3 from the centre.
+    constexpr double kQuietZoneScale = 4.0 / 3.0;
     for (const rig::PlanPosition& p : c.plan.positions()) {
       const vision::Pose T = c.geometry.T_cam_target(p.x_mm, p.y_mm);
-      for (const Eigen::Vector3d& corner : corners) {
-        const Eigen::Vector3d q = T * corner;
+      for (const Eigen::Vector3d& corner : c.target.corners_m(marker)) {
+        const Eigen::Vector3d q = T * (centre + kQuietZoneScale * (corner - centre));
         ASSERT_GT(q.z(), 0) << name;
         const Eigen::Vector2d px = cam.project(q);
         const Eigen::Vector2d pin(cam.intrinsics().fx * q.x() / q.z() + cam.intrinsics().cx,
@@ -224,11 +276,19 @@ TEST(SweepConfigValid, JsonHoldsEveryResolvedValue) {
 // ---- malformed and inconsistent sweep files -------------------------------
 
 struct BadCase {
+  BadCase(const char* name, std::string from, std::string to, std::string expected,
+          bool prefix_only = false, std::string prepend = "")
+      : name(name),
+        from(std::move(from)),
+        to(std::move(to)),
+        expected(std::move(expected)),
+        prefix_only(prefix_only),
+        prepend(std::move(prepend)) {}
   const char* name;
-  std::string from, to;      // edit of valid_sweep() (from = "" appends `to`)
-  std::string expected;      // the message after "PATH: "
-  bool prefix_only = false;  // the message continues with a quoted cause
-  std::string prepend;       // top-level keys put before the first table
+  std::string from, to;  // edit of valid_sweep() (from = "" appends `to`)
+  std::string expected;  // the message after "PATH: "
+  bool prefix_only;      // the message continues with a quoted cause
+  std::string prepend;   // top-level keys put before the first table
 };
 
 class SweepConfigMalformed : public ::testing::TestWithParam<BadCase> {};
@@ -320,8 +380,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "url = \"tcp://127.0.0.1:1502\"",
                 "bench.url = \"tcp://127.0.0.1:1502\": it does not load: bench URL "
                 "tcp://127.0.0.1:1502: expected modbus-tcp://HOST:PORT or "
-                "modbus-rtu:///dev/DEVICE?baud=...; expected a bench URL modbus-tcp://HOST:PORT "
-                "or modbus-rtu:///dev/DEVICE?baud=..."},
+                "modbus-rtu:///dev/DEVICE?baud=...; expected a valid bench URL"},
         BadCase{"bad_bench_port", "url = \"modbus-tcp://127.0.0.1:1502\"",
                 "url = \"modbus-tcp://127.0.0.1:99999\"",
                 "bench.url = \"modbus-tcp://127.0.0.1:99999\": it does not load: ", true},

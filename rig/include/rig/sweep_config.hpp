@@ -60,8 +60,11 @@
 //   allow_remote = false        false: endpoints must be loopback (127.x, localhost)
 //
 // Consistency checks: every plan position inside the profile's soft limits;
-// the speed at most the profile's max; the pose marker in front of the camera
-// (distance > 0) at every position; files exist and parse.
+// the speed at most the profile's max; the target in front of the camera
+// (z_cam > 0) at every position; the settle timeout longer than the plan's
+// longest move at the speed (distance / speed, a lower bound that ignores
+// acceleration, from the home position when home_first); publish != control;
+// every named file exists and parses (its own error is quoted).
 #pragma once
 
 #include <chrono>

@@ -58,7 +58,8 @@ class SweepPlan {
   SweepPlan() = default;
 
   // Preconditions: every value finite, steps > 0, min <= max, at most
-  // kMaxPositions positions. Throws PlanError ("grid: x_step_mm = -5: expected > 0").
+  // kMaxPositions positions. Throws PlanError
+  // ("grid: x_step_mm = -5: expected a finite number > 0").
   static SweepPlan grid(const Grid& grid);
 
   // Reads positions from a CSV file: the first line that is neither blank nor
