@@ -262,10 +262,11 @@ SweepPlan read_plan(Section& s, const fs::path& base_dir, const motion::SoftLimi
   s.reject_unknown("kind, x_mm, y_mm, serpentine, file");
 
   // Every position inside the soft limits, before anything moves.
-  const std::string key = kind == "csv" ? "file" : "x_mm";
   for (std::size_t i = 0; i < plan.size(); ++i) {
     const PlanPosition& p = plan.positions()[i];
     if (!limits.contains(p.x_mm, p.y_mm)) {
+      const bool x_inside = p.x_mm >= limits.x_min_mm && p.x_mm <= limits.x_max_mm;
+      const std::string key = kind == "csv" ? "file" : x_inside ? "y_mm" : "x_mm";
       s.fail(key, s.take(key),
              "every position inside the bench's soft limits x " + num(limits.x_min_mm) + ".." +
                  num(limits.x_max_mm) + " mm, y " + num(limits.y_min_mm) + ".." +

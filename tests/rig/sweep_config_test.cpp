@@ -343,6 +343,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "plan.x_mm = [0, 950, 100]: position 10 (x 950, y 140 mm) is outside; "
                 "expected every position inside the bench's soft limits x 0..900 mm, y 0..300 "
                 "mm"},
+        BadCase{"y_outside_soft_limits", "y_mm = [140, 160, 10]", "y_mm = [290, 310, 10]",
+                "plan.y_mm = [290, 310, 10]: position 20 (x 0, y 310 mm) is outside; expected "
+                "every position inside the bench's soft limits x 0..900 mm, y 0..300 mm"},
         BadCase{"csv_outside_soft_limits", kGrid, "kind = \"csv\"\nfile = \"outside.csv\"",
                 "plan.file = \"outside.csv\": position 1 (x 901, y 150 mm) is outside; expected "
                 "every position inside the bench's soft limits x 0..900 mm, y 0..300 mm"},
