@@ -537,7 +537,14 @@ SweepConfig load_sweep_config(const std::string& path) {
   c.faults.capture_retries = static_cast<int>(capture.integer_or("retries", 2, 0, 100));
   c.capture.retries = c.faults.capture_retries;
   const std::string save = capture.string_or("save_frames", "", "a folder path, or \"\"");
-  if (!save.empty()) c.frames_dir = resolve(base_dir, save);
+  if (!save.empty()) {
+    c.frames_dir = resolve(base_dir, save);
+    std::error_code ec;
+    if (fs::exists(*c.frames_dir, ec) && !fs::is_directory(*c.frames_dir, ec)) {
+      capture.fail("save_frames", capture.take("save_frames"), "a folder path, or \"\"",
+                   *c.frames_dir + " exists and is not a folder");
+    }
+  }
   capture.reject_unknown(
       "camera, calibration, frames_per_position, software_trigger, pixel_format, exposure_us, "
       "gain, grab_timeout_ms, retries, save_frames");
@@ -572,6 +579,13 @@ SweepConfig load_sweep_config(const std::string& path) {
   const std::string db = database.string("path", "the path of the run database");
   if (db.empty()) database.fail("path", database.take("path"), "the path of the run database");
   c.database_path = resolve(base_dir, db);
+  {
+    std::error_code ec;
+    if (fs::is_directory(c.database_path, ec)) {
+      database.fail("path", database.take("path"), "the path of the run database file",
+                    c.database_path + " is a folder");
+    }
+  }
   c.durable_commits = database.boolean_or("durable_commits", true);
   database.reject_unknown("path, durable_commits");
 

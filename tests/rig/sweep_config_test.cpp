@@ -305,7 +305,10 @@ TEST_P(SweepConfigMalformed, IsRefusedNamingFileKeyValueAndExpectation) {
       c.prepend + (c.from.empty() ? valid_sweep() + c.to : edit(valid_sweep(), c.from, c.to));
   const std::string path = write_file(dir / "sweep.toml", text);
   const std::string message = load_error(path);
-  const std::string expected = path + ": " + c.expected;
+  std::string expected = path + ": " + c.expected;
+  for (auto at = expected.find("{dir}"); at != std::string::npos; at = expected.find("{dir}")) {
+    expected.replace(at, 5, dir.string());
+  }
   if (c.prefix_only) {
     EXPECT_EQ(message.substr(0, expected.size()), expected) << message;
   } else {
@@ -352,7 +355,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"bad_csv", kGrid, "kind = \"csv\"\nfile = \"bad.csv\"",
                 "plan.file = \"bad.csv\": it does not load: ", true},
         BadCase{"missing_csv", kGrid, "kind = \"csv\"\nfile = \"none.csv\"",
-                "plan.file = \"none.csv\": ", true},
+                "plan.file = \"none.csv\": {dir}/none.csv is not an existing file; expected the "
+                "path of a CSV plan (x_mm,y_mm) (relative to the sweep file)"},
         BadCase{"csv_and_grid", "y_mm = [140, 160, 10]", "y_mm = [140, 160, 10]\nfile = \"x.csv\"",
                 "plan.file = \"x.csv\": plan.file belongs to kind = \"csv\", not \"grid\"; "
                 "expected exactly one kind of plan"},
@@ -370,7 +374,8 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"speed_zero", "speed_mm_s = 100", "speed_mm_s = 0",
                 "bench.speed_mm_s = 0: expected a speed in (0, 100] mm/s (the profile's max)"},
         BadCase{"missing_calibration", "calibration = \"\"", "calibration = \"cam.yaml\"",
-                "capture.calibration = \"cam.yaml\": ", true},
+                "capture.calibration = \"cam.yaml\": {dir}/cam.yaml is not an existing file; "
+                "expected the path of a camera calibration file (relative to the sweep file)"},
         BadCase{"bad_calibration", "calibration = \"\"", "calibration = \"garbage.yaml\"",
                 "capture.calibration = \"garbage.yaml\": it does not load: ", true},
         BadCase{"bad_camera_spec", "camera = \"gige:127.0.0.1\"", "camera = \"usb:0\"",
@@ -444,7 +449,16 @@ INSTANTIATE_TEST_SUITE_P(
                 "capture.pixel_format = \"RGB8\": expected \"Mono8\", \"Mono10\", \"Mono12\" or "
                 "\"Mono16\""},
         BadCase{"missing_replay_folder", "camera = \"gige:127.0.0.1\"",
-                "camera = \"replay:frames\"", "capture.camera = \"replay:frames\": ", true},
+                "camera = \"replay:frames\"",
+                "capture.camera = \"replay:frames\": {dir}/frames is not a folder; expected "
+                "replay:DIR with an existing folder"},
+        BadCase{
+            "database_is_a_folder", "path = \"out/run.db\"", "path = \".\"",
+            "database.path = \".\": {dir}/ is a folder; expected the path of the run database file"},
+        BadCase{"save_frames_is_a_file", "frames_per_position = 3",
+                "frames_per_position = 3\nsave_frames = \"bad.csv\"",
+                "capture.save_frames = \"bad.csv\": {dir}/bad.csv exists and is not a folder; "
+                "expected a folder path, or \"\""},
         BadCase{"negative_dwell", "dwell_ms = 0", "dwell_ms = -1",
                 "settle.dwell_ms = -1: expected an integer in 0..3600000"},
         BadCase{"toml_syntax", "frames_per_position = 3", "frames_per_position = = 3",
