@@ -452,9 +452,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "camera = \"replay:frames\"",
                 "capture.camera = \"replay:frames\": {dir}/frames is not a folder; expected "
                 "replay:DIR with an existing folder"},
-        BadCase{
-            "database_is_a_folder", "path = \"out/run.db\"", "path = \".\"",
-            "database.path = \".\": {dir}/ is a folder; expected the path of the run database file"},
+        BadCase{"database_is_a_folder", "path = \"out/run.db\"", "path = \".\"",
+                "database.path = \".\": {dir}/ is a folder; expected the path of the run database "
+                "file"},
         BadCase{"save_frames_is_a_file", "frames_per_position = 3",
                 "frames_per_position = 3\nsave_frames = \"bad.csv\"",
                 "capture.save_frames = \"bad.csv\": {dir}/bad.csv exists and is not a folder; "
