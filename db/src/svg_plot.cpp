@@ -156,17 +156,37 @@ Scale make_scale(const Figure& f, bool is_x, double length_px) {
       e.lo = 0, e.hi = 1;
     }
   }
+  const bool no_data = data_extent(f, is_x).empty();
+  // Bars rise from 0: no padding below (above) a 0 that bars put there.
+  const bool bars_from_zero =
+      !is_x && !axis.log &&
+      std::any_of(f.series.begin(), f.series.end(), [](const Series& s) { return has_bars(s); });
+  if (axis.log && e.hi - e.lo == 0 && !axis.min && !axis.max) {  // one value: a decade around it
+    e.lo -= 0.5;
+    e.hi += 0.5;
+  }
+  const Extent raw = e;
   const double span = e.hi - e.lo;
-  if (!axis.min && e.lo != 0) e.lo -= kPadding * span;
-  if (!axis.max && e.hi != 0) e.hi += kPadding * span;
+  if (!no_data && !axis.min && !(bars_from_zero && e.lo == 0)) e.lo -= kPadding * span;
+  if (!no_data && !axis.max && !(bars_from_zero && e.hi == 0)) e.hi += kPadding * span;
 
   Scale s;
   s.log = axis.log;
   const auto value = [&](double c) { return axis.log ? std::pow(10.0, c) : c; };
-  std::vector<double> ticks =
-      axis.log ? nice_log_ticks(value(e.lo), value(e.hi), target) : nice_ticks(e.lo, e.hi, target);
-  s.lo = axis.min ? *axis.min : std::min(ticks.front(), value(e.lo));
-  s.hi = axis.max ? *axis.max : std::max(ticks.back(), value(e.hi));
+  // Linear: the ticks enclosing the data, and the range covering both them
+  // and the padded data (padding past a tick does not add a whole step).
+  // Log: the padded data range (a whole extra decade would waste the plot),
+  // extended to the enclosing ticks only if fewer than two fall inside.
+  std::vector<double> ticks = axis.log ? nice_log_ticks(value(e.lo), value(e.hi), target)
+                                       : nice_ticks(raw.lo, raw.hi, target);
+  const auto inside = [&](double t, double lo, double hi) {
+    return t >= lo * (1 - 1e-9) && t <= hi * (1 + 1e-9);
+  };
+  const bool extend = !axis.log || std::count_if(ticks.begin(), ticks.end(), [&](double t) {
+                                     return inside(t, value(e.lo), value(e.hi));
+                                   }) < 2;
+  s.lo = axis.min ? *axis.min : extend ? std::min(ticks.front(), value(e.lo)) : value(e.lo);
+  s.hi = axis.max ? *axis.max : extend ? std::max(ticks.back(), value(e.hi)) : value(e.hi);
   if (!(s.lo < s.hi)) {  // a single value: nice_ticks widened it, the ticks span it
     s.lo = ticks.front();
     s.hi = ticks.back();

@@ -35,7 +35,8 @@ int decimals_of(double step) {
   step = std::fabs(step);
   for (int d = 0; d < 15; ++d) {
     const double s = step * power_of_ten(d);
-    if (std::fabs(s - std::round(s)) <= 1e-9 * std::max(1.0, s)) return d;
+    // An integer up to the rounding of the scaling (relative, as step may be 1e-10).
+    if (s >= 0.5 && std::fabs(s - std::round(s)) <= 1e-9 * s) return d;
   }
   return 15;
 }
@@ -122,27 +123,28 @@ std::vector<double> nice_log_ticks(double lo, double hi, int target_count) {
     ticks.assign(all.begin() + first, all.begin() + last + 1);
     return ticks;
   }
+  // Many decades: every stride-th decade, the smallest stride giving at most
+  // target_count + 1 ticks (3 gives the engineering steps 10^-3, 1, 10^3).
   int stride = 1;
-  if (k1 - k0 + 1 > 2 * target_count) {
-    for (int s : {2, 5, 10, 20, 50, 100}) {
-      stride = s;
-      const int a = static_cast<int>(std::floor(static_cast<double>(k0) / s));
-      const int b = static_cast<int>(std::ceil(static_cast<double>(k1) / s));
-      if (b - a + 1 <= target_count) break;
-    }
-    k0 = static_cast<int>(std::floor(static_cast<double>(k0) / stride)) * stride;
-    k1 = static_cast<int>(std::ceil(static_cast<double>(k1) / stride)) * stride;
+  for (int s : {1, 2, 3, 5, 10, 20, 50, 100}) {
+    stride = s;
+    const int a = static_cast<int>(std::floor(static_cast<double>(k0) / s));
+    const int b = static_cast<int>(std::ceil(static_cast<double>(k1) / s));
+    if (b - a + 1 <= target_count + 1) break;
   }
+  k0 = static_cast<int>(std::floor(static_cast<double>(k0) / stride)) * stride;
+  k1 = static_cast<int>(std::ceil(static_cast<double>(k1) / stride)) * stride;
   for (int k = k0; k <= k1; k += stride)
     ticks.push_back(scaled(1, k));
   return ticks;
 }
 
 std::string tick_label(double value, double step) {
-  if (value == 0) return "0";
+  value += 0.0;  // -0 -> +0: never "-0.0"
   char buf[64];
   const int decimals = decimals_of(step);
-  if (std::fabs(value) < 1e6 && decimals <= 4) {
+  if (value == 0 || (std::fabs(value) < 1e6 && decimals <= 4)) {
+    if (value == 0 && decimals > 4) return "0";
     std::snprintf(buf, sizeof buf, "%.*f", decimals, value);
     return buf;
   }

@@ -28,9 +28,11 @@ struct Axis {
   // log10 scale. Points with a value <= 0 on a log axis are not drawn; the
   // figure says how many in a note under the plot area.
   bool log = false;
-  // Unset: from the data (including error bars) with 4 % padding, extended to
-  // the enclosing ticks. Set: used exactly (ticks inside only); points outside
-  // are clipped at the plot area's edge.
+  // Unset: from the data (including error bars; 0 for bars) with 4 % padding;
+  // a linear axis also reaches the 1-2-5 ticks enclosing the data, a log axis
+  // keeps the padded range unless fewer than two ticks fall in it. No data:
+  // [0, 1] ([1, 10] on a log axis). Set: used exactly (ticks inside only);
+  // points outside are clipped at the plot area's edge.
   std::optional<double> min, max;
 };
 
@@ -76,15 +78,17 @@ struct Figure {
 // target_count < 2.
 std::vector<double> nice_ticks(double lo, double hi, int target_count);
 
-// Ticks of a log10 axis covering [lo, hi] (0 < lo <= hi, finite): decades
-// 10^k (every 2nd, 5th, ... decade if all decades would be more than
-// 2 * target_count ticks);
-// within at most two decades also 2 and 5 x 10^k. First tick <= lo, last >= hi.
+// Ticks of a log10 axis covering [lo, hi] (first tick <= lo, last >= hi):
+// within at most two decades 1, 2 and 5 x 10^k; otherwise decades 10^k, every
+// 2nd, 3rd, 5th, 10th, ... decade (the smallest such stride giving at most
+// target_count + 1 ticks).
 // Throws std::invalid_argument if lo <= 0, lo > hi or either is not finite.
 std::vector<double> nice_log_ticks(double lo, double hi, int target_count);
 
 // Tick label text: plain decimals with as many places as the step needs
-// ("0.25", "1500"); "2.5×10⁻⁹" style for very small or large values.
+// ("0.25", "1500", "0.0" for 0 with step 0.2) while |value| < 1e6 and the step
+// needs at most 4 places; otherwise "2.5×10⁻⁹" (mantissa with the places the
+// step needs at that power of ten, "0" for zero).
 std::string tick_label(double value, double step);
 
 // One axis after layout: the range and ticks in data units, and the pixel
