@@ -104,6 +104,8 @@ SweepPlan SweepPlan::from_csv(const std::string& path) {
   int line_number = 0;
   for (std::string raw; std::getline(in, raw);) {
     ++line_number;
+    // Spreadsheets export "CSV UTF-8" with a byte order mark; it is not part of the header.
+    if (line_number == 1 && raw.rfind("\xEF\xBB\xBF", 0) == 0) raw.erase(0, 3);
     const std::string where = path + ":" + std::to_string(line_number) + ": ";
     const std::string line = trim(raw.substr(0, raw.find('#')));
     if (line.empty()) continue;

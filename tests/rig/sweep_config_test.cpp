@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -140,6 +142,29 @@ TEST(SweepConfigShipped, PaperIsThe1939PositionProtocolOverTheXTravel) {
   }
   EXPECT_EQ(x_min, c.bench_profile.soft_limits.x_min_mm);
   EXPECT_EQ(x_max, c.bench_profile.soft_limits.x_max_mm);
+  // With the file's own geometry, every one of the ten distance classes of
+  // 0.09 m from 0.10 to 1.00 m holds positions (~28 columns x 7 rows each).
+  std::vector<int> per_class(10, 0);
+  for (const rig::PlanPosition& p : c.plan.positions()) {
+    const double d = c.geometry.distance_m(p.x_mm, p.y_mm);
+    ++per_class[std::min(9, std::max(0, static_cast<int>(std::floor((d - 0.10) / 0.09))))];
+  }
+  for (int k = 0; k < 10; ++k)
+    EXPECT_GE(per_class[k], 7 * 27) << "class " << k;
+}
+
+TEST(SweepConfigValid, APaperPlanWithoutRangesSpansTheProfilesSoftLimits) {
+  const fs::path dir = temp_dir("paper_default");
+  const std::string text =
+      edit(valid_sweep(), "kind = \"grid\"\nx_mm = [0, 900, 100]\ny_mm = [140, 160, 10]",
+           "kind = \"paper\"");
+  const SweepConfig c = rig::load_sweep_config(write_file(dir / "sweep.toml", text));
+  ASSERT_EQ(c.plan.size(), 1939u);
+  const motion::SoftLimits& limits = c.bench_profile.soft_limits;
+  EXPECT_EQ(c.plan.positions().front().x_mm, limits.x_min_mm);
+  EXPECT_EQ(c.plan.positions().front().y_mm, limits.y_min_mm);
+  EXPECT_EQ(c.plan.positions().back().x_mm, limits.x_max_mm);
+  EXPECT_EQ(c.plan.positions().back().y_mm, limits.y_max_mm);
 }
 
 TEST(SweepConfigShipped, SmokeIsTwelvePositionsOfTwoFramesWithDefaultsElsewhere) {

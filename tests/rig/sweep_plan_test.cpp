@@ -124,6 +124,12 @@ TEST(SweepPlanCsv, ReadsPositionsSkippingCommentsAndBlankLines) {
   EXPECT_EQ(plan.description(), "csv " + path + " (3 positions)");
 }
 
+TEST(SweepPlanCsv, AcceptsTheByteOrderMarkOfASpreadsheetExport) {
+  const std::string path = write_file("bom.csv", "\xEF\xBB\xBFx_mm,y_mm\r\n1,2\r\n");
+  const std::vector<std::pair<double, double>> expected = {{1, 2}};
+  EXPECT_EQ(xy(SweepPlan::from_csv(path)), expected);
+}
+
 TEST(SweepPlanCsv, ErrorsNameFileLineValueAndExpectation) {
   struct Case {
     const char* name;

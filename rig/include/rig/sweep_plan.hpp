@@ -65,9 +65,9 @@ class SweepPlan {
   // Reads positions from a CSV file: the first line that is neither blank nor
   // a comment is the header "x_mm,y_mm"; every following such line is one
   // position "X,Y" (finite numbers, mm). '#' starts a comment (a whole line or
-  // the rest of a line); blank lines, spaces around values and CRLF line ends
-  // are accepted. Throws PlanError "PATH:LINE: ..." naming the text found and
-  // what was expected, or "PATH: ..." for an unreadable file or a file
+  // the rest of a line); blank lines, spaces around values, CRLF line ends and
+  // a UTF-8 byte order mark (spreadsheet exports) are accepted. Throws PlanError "PATH:LINE: ..."
+  // naming the text found and what was expected, or "PATH: ..." for an unreadable file or a file
   // without positions.
   static SweepPlan from_csv(const std::string& path);
 
