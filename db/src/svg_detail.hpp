@@ -32,6 +32,9 @@ std::string escape(std::string_view text);
 // Pixel coordinate with at most two decimals, trailing zeros dropped.
 std::string px(double v);
 double text_width(std::string_view text, double font_px);
+// `text` cut to at most `width` px (estimated) at a UTF-8 character boundary,
+// ending in "…" if cut.
+std::string fit_text(const std::string& text, double width, double font_px);
 std::string axis_title(const Axis& axis);
 // x and y finite, and > 0 on a log axis.
 bool drawable(const Figure& f, double x, double y);
@@ -42,7 +45,8 @@ size_t drawn_point_count(const Figure& f);
 
 struct LegendItem {
   size_t series;
-  double x, y;  // left and top of the entry, relative to the legend's origin
+  double x, y;       // left and top of the entry, relative to the legend's origin
+  std::string text;  // the label, cut with "…" if it is wider than the figure
 };
 // Entries of the labelled series flowing left to right, wrapped to `width`.
 std::vector<LegendItem> legend_items(const Figure& f, double width, int* rows);

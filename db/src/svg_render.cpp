@@ -287,8 +287,10 @@ std::string render_svg(const Figure& f) {
       o += "<g class=\"legend-entry\">";
       draw_legend_sample(f.series[item.series], item.series, colours[item.series], item.x, cy, o);
       o += "<text" + attr("x", px(item.x + kLegendSample + 6)) +
-           attr("y", px(cy + 0.35 * kLegendFont)) + ">" + escape(f.series[item.series].label) +
-           "</text></g>";
+           attr("y", px(cy + 0.35 * kLegendFont)) + ">" + escape(item.text);
+      if (item.text != f.series[item.series].label)  // the whole label as a tooltip
+        o += "<title>" + escape(f.series[item.series].label) + "</title>";
+      o += "</text></g>";
     }
     o += "</g>";
   }

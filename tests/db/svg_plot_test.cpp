@@ -220,6 +220,26 @@ TEST(RenderSvg, OneLegendEntryPerLabelledSeries) {
   EXPECT_EQ(texts, (std::set<std::string>{"measured", "fit"}));
 }
 
+TEST(RenderSvg, CutsALegendLabelWiderThanTheFigure) {
+  Figure f = Scatter();
+  std::string label;
+  for (int i = 0; i < 40; ++i)
+    label += "σ label ";  // 320 characters, over 2000 px at 12 px
+  f.series[0].label = label;
+  const xml_check::Document d = Parse(f);
+  const auto entries = xml_check::find(d, "g", "legend-entry");
+  ASSERT_EQ(entries.size(), 2u);
+  bool cut = false;
+  for (const auto& e : d.elements)
+    if (e.name == "text" && e.depth == entries[0].depth + 1 && e.text.size() < label.size() &&
+        e.text.compare(e.text.size() - 3, 3, "…") == 0) {
+      cut = true;
+      EXPECT_EQ(label.compare(0, e.text.size() - 3, e.text, 0, e.text.size() - 3), 0);
+    }
+  EXPECT_TRUE(cut);
+  EXPECT_EQ(TextsOf(xml_check::find(d, "title")).count(label), 1u) << "full label as tooltip";
+}
+
 TEST(RenderSvg, OneErrorBarPerDrawnPointWithAFiniteError) {
   Figure f;
   f.id = "errors";
