@@ -227,8 +227,7 @@ nlohmann::json send_control(const std::string& endpoint, const std::string& comm
   std::string text;
   int frames = 0;
   while (!telemetry_detail::receive_all(socket, text, frames)) {
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left = telemetry_detail::time_left(deadline);
     if (left.count() <= 0) throw TelemetryError(no_answer);
     zmq::pollitem_t item{socket.handle(), 0, ZMQ_POLLIN, 0};
     telemetry_detail::poll(&item, 1, left);

@@ -211,8 +211,7 @@ bool TelemetryPublisher::wait_for_subscribers(int count, std::chrono::millisecon
     std::lock_guard<std::mutex> lock(impl_->mutex);
     impl_->read_subscriptions();
     if (impl_->subscribers >= count) return true;
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left = telemetry_detail::time_left(deadline);
     if (left.count() <= 0) return false;
     zmq::pollitem_t item{impl_->socket.handle(), 0, ZMQ_POLLIN, 0};
     telemetry_detail::poll(&item, 1, std::min(left, kSlice));
@@ -255,8 +254,7 @@ std::optional<nlohmann::json> TelemetrySubscriber::receive(std::chrono::millisec
   int frames = 0;
   for (;;) {
     if (telemetry_detail::receive_all(impl_->socket, text, frames)) break;
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
+    const auto left = telemetry_detail::time_left(deadline);
     if (left.count() <= 0) return std::nullopt;
     zmq::pollitem_t item{impl_->socket.handle(), 0, ZMQ_POLLIN, 0};
     telemetry_detail::poll(&item, 1, left);

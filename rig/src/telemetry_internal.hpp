@@ -18,6 +18,12 @@ zmq::socket_t make_socket(zmq::socket_type type, const std::string& endpoint);
 // zmq::poll that treats an interrupted wait (EINTR) as "nothing ready".
 int poll(zmq::pollitem_t* items, size_t count, std::chrono::milliseconds timeout);
 
+// Whole milliseconds until `deadline`, rounded up (so a wait never ends early);
+// zero or less once it has passed.
+inline std::chrono::milliseconds time_left(std::chrono::steady_clock::time_point deadline) {
+  return std::chrono::ceil<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+}
+
 // Receives every frame of the next message (dontwait); returns false if none
 // is queued. Frames after the first are appended, so a multipart message is
 // read whole and can be rejected as one.
