@@ -156,7 +156,10 @@ TEST(BrowserFigures, EveryFigureRendersWithoutConsoleErrors) {
   page.begin_section("figures", "Figures");
   for (const Figure& f : {ErrorBars(), LogLog(), Bars(), Negative()})
     page.figure(f);
-  page.table({"tab", "A table", {"solver", "error (mm)"}, {{{"IPPE", "", ""}, {"0.12", "num better", ""}}}});
+  page.table({"tab",
+              "A table",
+              {"solver", "error (mm)"},
+              {{{"IPPE", "", ""}, {"0.12", "num better", ""}}}});
   page.end_section();
   const fs::path html = Write("figures.html", page.str());
   const fs::path png = ArtifactDir() / "figures.png";

@@ -36,7 +36,10 @@ Page FullPage() {
   p.paragraph("Errors are in mm.");
   p.figure(SmallFigure("fig-a"));
   p.heading(3, "By tag size", "by-size");
-  p.table({"tab-a", "Per solver", {"solver", "error (mm)"}, {{{"IPPE", "", ""}, {"0.12", "num better", ""}}}});
+  p.table({"tab-a",
+           "Per solver",
+           {"solver", "error (mm)"},
+           {{{"IPPE", "", ""}, {"0.12", "num better", ""}}}});
   p.end_section();
   p.begin_section("appendix", "Appendix");
   p.end_section();
