@@ -124,15 +124,24 @@ struct SweepConfig {
   std::string sweep_file;       // absolute path of the file read
   std::string sweep_file_text;  // its bytes (stored in the run)
   SweepPlan plan;
-  int frames_per_position = 3;       // >= 1 (N > 1 separates jitter from bias)
-  std::optional<double> speed_mm_s;  // move speed, mm/s; unset = the profile's default
-  bool home_first = true;            // home the bench before the first move
+  // Frames taken at each position, 1..1000. N > 1 separates the estimate's
+  // jitter (spread over the N frames) from its bias; each frame adds a
+  // trigger-to-frame time (~exposure + transfer) per position.
+  int frames_per_position = 3;
+  // Move speed, mm/s, in (0, profile max]; unset = the profile's default.
+  // Faster sweeps; slower moves ring less and settle sooner.
+  std::optional<double> speed_mm_s;
+  // Home the bench before the first move. false skips homing (which takes
+  // minutes on some drives) when the bench is known to be homed; the first
+  // move then starts wherever the bench stands.
+  bool home_first = true;
   SettlePolicy settle;
   FaultPolicy faults;
   std::string bench_url;           // e.g. "modbus-tcp://127.0.0.1:1502" (validated)
   std::string bench_profile_path;  // absolute
   motion::DriveProfile bench_profile;
-  std::string camera_spec;              // e.g. "gige:127.0.0.1" (scheme validated)
+  // e.g. "gige:127.0.0.1" (scheme validated); a replay folder is made absolute.
+  std::string camera_spec;
   vision::CaptureOptions capture;       // capture.retries == faults.capture_retries
   std::string camera_calibration_path;  // absolute, or "" = the paper's Sony XC-555
   vision::Camera camera = vision::Camera::paper_default();
@@ -141,12 +150,20 @@ struct SweepConfig {
   std::string rig_geometry_path;  // absolute file the geometry came from ("" if inline)
   std::string rig_geometry_text;  // the geometry's TOML (file content, or the inline tables)
   vision::RigGeometry geometry;
-  std::optional<std::string> frames_dir;  // absolute; unset = frames are not saved
-  std::string database_path;              // absolute; `rig sweep --db` overrides
-  std::string telemetry_publish = "tcp://127.0.0.1:5556";
-  std::string telemetry_control = "tcp://127.0.0.1:5557";
+  // Folder for raw frames as PNG, absolute; unset = frames are not saved.
+  // Saving keeps every frame for re-analysis (~0.4 MB per 736x571 Mono8
+  // frame) at the cost of disk and an encode per frame.
+  std::optional<std::string> frames_dir;
+  std::string database_path;                               // absolute; `rig sweep --db` overrides
+  std::string telemetry_publish = "tcp://127.0.0.1:5556";  // ZeroMQ PUB endpoint (bound)
+  std::string telemetry_control = "tcp://127.0.0.1:5557";  // ZeroMQ REP endpoint (bound)
+  // false: both endpoints must be loopback, so nobody on the network can
+  // pause or abort a run; true allows e.g. tcp://*:5556 for a remote monitor.
   bool telemetry_allow_remote = false;
-  bool durable_commits = true;  // fsync the database after every position
+  // fsync the database after every position: a power cut loses at most the
+  // position being measured; false is faster on slow disks but may lose the
+  // last positions (the run then resumes from an earlier one).
+  bool durable_commits = true;
 
   // Every resolved value (absolute paths, defaults filled in, the plan's
   // description and size but not its positions), for runs.config_json.
