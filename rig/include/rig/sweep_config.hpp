@@ -151,7 +151,7 @@ struct SweepConfig {
   std::string rig_geometry_text;  // the geometry's TOML (file content, or the inline tables)
   vision::RigGeometry geometry;
   // Folder for raw frames as PNG, absolute; unset = frames are not saved.
-  // Saving keeps every frame for re-analysis (~0.4 MB per 736x571 Mono8
+  // Saving keeps every frame for re-analysis (up to 0.4 MB per 736x571 Mono8
   // frame) at the cost of disk and an encode per frame.
   std::optional<std::string> frames_dir;
   std::string database_path;                               // absolute; `rig sweep --db` overrides
