@@ -1,0 +1,84 @@
+// Run comparison (issue 7 §4): each solver's figures against the baseline's,
+// flagged only where the difference exceeds k standard errors.
+#include <cmath>
+
+#include "db/report.hpp"
+#include "db/stats_error.hpp"
+
+namespace db {
+namespace {
+
+// direction: +1 when larger is worse (errors, failure rates), 0 when a
+// change is neither (slope, intercept: either way is away from or towards
+// the truth depending on the side; times: machine-dependent).
+void add(std::vector<ComparedFigure>& out, const SolverStudy& c, const std::string& figure,
+         double candidate, double baseline, const stats::Difference& d, int direction) {
+  ComparedFigure f;
+  f.solver = c.solver;
+  f.scope = c.scope;
+  f.figure = figure;
+  f.candidate = candidate;
+  f.baseline = baseline;
+  f.difference = d;
+  f.worse = direction > 0 && d.increased();
+  f.better = direction > 0 && d.decreased();
+  out.push_back(f);
+}
+
+void compare_summaries(std::vector<ComparedFigure>& out, const SolverStudy& c,
+                       const std::string& figure, const stats::Summary& a, const stats::Summary& b,
+                       double k, int direction) {
+  if (a.count < 2 || b.count < 2) return;
+  try {
+    add(out, c, figure, a.mean, b.mean, stats::compare_means(a, b, k), direction);
+  } catch (const stats::StatsError&) {
+    // Non-finite variance: nothing to compare.
+  }
+}
+
+// Failure rate x/n against the baseline's, with the pooled two-proportion
+// standard error sqrt(p (1 - p) (1/n1 + 1/n2)), p = (x1 + x2) / (n1 + n2):
+// under "no change" both runs share p, and unlike separate binomial errors it
+// does not call 1 failure in 10^5 significant against a baseline with none.
+void compare_failure_rate(std::vector<ComparedFigure>& out, const SolverStudy& c,
+                          const SolverStudy& b, double k) {
+  const double n1 = static_cast<double>(c.estimates - c.skipped);
+  const double n2 = static_cast<double>(b.estimates - b.skipped);
+  if (n1 < 1 || n2 < 1) return;
+  const double x1 = static_cast<double>(c.failed), x2 = static_cast<double>(b.failed);
+  const double p = (x1 + x2) / (n1 + n2);
+  const double se = std::sqrt(p * (1 - p) * (1 / n1 + 1 / n2));
+  if (!(se > 0)) return;  // no failures in either run
+  add(out, c, "failure rate", x1 / n1, x2 / n2,
+      stats::compare_estimates(x1 / n1, se, x2 / n2, 0.0, k), +1);
+}
+
+}  // namespace
+
+std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
+                                         double k) {
+  std::vector<ComparedFigure> out;
+  for (const SolverStudy& c : candidate.solvers) {
+    const SolverStudy* b = baseline.find(c.solver, c.scope);
+    if (b == nullptr) continue;
+    compare_summaries(out, c, "mean |distance error| per position (m)", c.position_abs_error_m,
+                      b->position_abs_error_m, k, +1);
+    compare_summaries(out, c, "mean reprojection error per position (px)",
+                      c.position_reprojection_px, b->position_reprojection_px, k, +1);
+    compare_summaries(out, c, "mean generalization error per position (px)",
+                      c.position_generalization_px, b->position_generalization_px, k, +1);
+    compare_failure_rate(out, c, *b, k);
+    if (c.ols && b->ols) {
+      add(out, c, "slope a", c.ols->slope, b->ols->slope, stats::compare_slopes(*c.ols, *b->ols, k),
+          0);
+      add(out, c, "intercept b (m)", c.ols->intercept, b->ols->intercept,
+          stats::compare_estimates(c.ols->intercept, c.ols->intercept_se, b->ols->intercept,
+                                   b->ols->intercept_se, k),
+          0);
+    }
+    compare_summaries(out, c, "time per pose (µs)", c.time_us, b->time_us, k, 0);
+  }
+  return out;
+}
+
+}  // namespace db

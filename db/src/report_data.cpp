@@ -1,0 +1,242 @@
+#include "report_data.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+#include <utility>
+
+#include "db/report.hpp"
+#include "db/store.hpp"
+#include "sqlite.hpp"
+
+namespace db::report {
+
+const char* const kEstimatesQuery =
+    "SELECT p.plan_index, f.frame_index, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
+    "e.r12, e.r20, e.r21, e.r22, e.distance_m, e.reprojection_error_px, "
+    "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio "
+    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN estimates e ON e.frame_id = f.id "
+    "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
+
+const char* const kDetectionsQuery =
+    "SELECT p.plan_index, f.frame_index, d.marker_id, d.a_x_px, d.a_y_px, d.b_x_px, d.b_y_px, "
+    "d.c_x_px, d.c_y_px, d.d_x_px, d.d_y_px, d.edge_fit_residual_px "
+    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN detections d ON d.frame_id = f.id "
+    "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
+
+const char* const kFramesQuery =
+    "SELECT p.plan_index, count(f.id) FROM positions p JOIN frames f ON f.position_id = p.id "
+    "WHERE p.run_id = ?1 GROUP BY p.plan_index ORDER BY p.plan_index";
+
+double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<double, 9>& R_b) {
+  // trace(R_a^T R_b) = sum_ij R_a[i][j] R_b[i][j]; angle = acos((trace - 1) / 2).
+  double trace = 0;
+  for (int i = 0; i < 9; ++i)
+    trace += R_a[i] * R_b[i];
+  const double c = std::clamp(0.5 * (trace - 1.0), -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+namespace {
+
+bool is_skipped(const std::string& termination) {
+  return termination == "skipped" || termination == "not_applicable";
+}
+
+Run pick_run(const Store& store, const std::string& database, std::optional<std::int64_t> run_id) {
+  const std::vector<Run> runs = store.runs();
+  if (run_id) {
+    for (const Run& r : runs) {
+      if (r.id != *run_id) continue;
+      if (r.status == RunStatus::kRunning) {
+        throw ReportInputError(database + ": run " + std::to_string(*run_id) +
+                               " is still running; expected a completed, aborted or failed run");
+      }
+      return r;
+    }
+    std::string known;
+    for (const Run& r : runs)
+      known += (known.empty() ? "" : ", ") + std::to_string(r.id);
+    throw ReportInputError(database + ": no run " + std::to_string(*run_id) +
+                           " (runs: " + (known.empty() ? "none" : known) + ")");
+  }
+  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
+    if (it->status == RunStatus::kCompleted) return *it;
+  }
+  throw ReportInputError(database + ": no completed run (" + std::to_string(runs.size()) +
+                         " run(s), none completed); finish a sweep first or name one with --run");
+}
+
+// Per position: the corners of each marker over its frames.
+struct CornerSeries {
+  std::vector<std::array<double, 8>> corners;
+  stats::RunningSummary edge;
+};
+
+void flush_markers(std::map<int, CornerSeries>& series, PositionData& position) {
+  for (auto& [id, s] : series) {
+    MarkerAtPosition m;
+    m.marker_id = id;
+    m.frames_detected = s.corners.size();
+    m.edge_fit_residual_px = s.edge.summary();
+    double side = 0;
+    for (const auto& c : s.corners) {
+      for (int k = 0; k < 4; ++k) {
+        const int n = (k + 1) % 4;
+        side += std::hypot(c[2 * n] - c[2 * k], c[2 * n + 1] - c[2 * k + 1]);
+      }
+    }
+    m.side_px = side / (4.0 * static_cast<double>(s.corners.size()));
+    if (s.corners.size() >= 2) {
+      for (int k = 0; k < 8; ++k) {
+        double mean = 0;
+        for (const auto& c : s.corners)
+          mean += c[k];
+        mean /= static_cast<double>(s.corners.size());
+        for (const auto& c : s.corners)
+          m.corner_sum_squares += (c[k] - mean) * (c[k] - mean);
+        m.corner_dof += s.corners.size() - 1;
+      }
+    }
+    position.markers.push_back(m);
+  }
+  series.clear();
+}
+
+}  // namespace
+
+RunData load_run(const std::string& database, std::optional<std::int64_t> run_id) {
+  RunData data;
+  data.database = database;
+  StoreOptions options;
+  options.read_only = true;
+  std::optional<Store> store;
+  try {
+    store.emplace(database, options);
+  } catch (const StoreError& e) {
+    // Missing, not SQLite, another program's, newer or older schema: input
+    // the user must fix, not a failure of this program.
+    throw ReportInputError(e.what());
+  }
+  data.run = pick_run(*store, database, run_id);
+  const std::int64_t id = data.run.id;
+  std::unordered_map<std::int64_t, std::uint32_t> slot_of;
+  for (PositionRecord& p : store->positions(id)) {
+    slot_of.emplace(p.plan_index, static_cast<std::uint32_t>(data.positions.size()));
+    PositionData pd;
+    pd.record = std::move(p);
+    data.positions.push_back(std::move(pd));
+  }
+  data.events = store->events(id);
+  store.reset();
+
+  sqlite::Connection connection(database, SQLITE_OPEN_READONLY);
+  connection.exec("PRAGMA query_only = ON");
+
+  {
+    sqlite::Statement frames(connection, kFramesQuery);
+    frames.bind(1, id);
+    while (frames.step())
+      data.positions[slot_of.at(frames.get_int64(0))].frames =
+          static_cast<std::size_t>(frames.get_int64(1));
+  }
+
+  {
+    std::map<std::pair<std::string, std::string>, std::size_t> key_index;
+    std::vector<SolverScopeData> solvers;
+    // Rotations of the current frame by solver: [0] scope "0", [1] "target".
+    struct FrameRotations {
+      bool has[2] = {false, false};
+      std::array<double, 9> R[2];
+    };
+    std::map<std::string, FrameRotations> frame_rotations;
+    std::int64_t current_plan = -1;
+    std::int64_t current_frame = -1;
+    std::uint32_t current_slot = 0;
+    auto flush_frame = [&] {
+      for (auto& [solver, fr] : frame_rotations) {
+        if (fr.has[0] && fr.has[1]) {
+          data.flips[solver].push_back({current_slot, rotation_angle_deg(fr.R[0], fr.R[1])});
+        }
+        fr.has[0] = fr.has[1] = false;
+      }
+    };
+
+    sqlite::Statement select(connection, kEstimatesQuery);
+    select.bind(1, id);
+    std::string solver, scope;
+    while (select.step()) {
+      const std::int64_t plan = select.get_int64(0);
+      const std::int64_t frame = select.get_int64(1);
+      if (plan != current_plan || frame != current_frame) {
+        flush_frame();
+        if (plan != current_plan) current_slot = slot_of.at(plan);
+        current_plan = plan;
+        current_frame = frame;
+      }
+      solver = select.get_text(2);
+      scope = select.get_text(3);
+      auto [it, inserted] = key_index.try_emplace({solver, scope}, solvers.size());
+      if (inserted) solvers.push_back(SolverScopeData{solver, scope, {}, {}});
+      SolverScopeData& target = solvers[it->second];
+
+      EstimateSample s;
+      s.position = current_slot;
+      s.frame = static_cast<std::uint32_t>(frame);
+      s.distance_m = select.get_double(13);
+      s.reprojection_px = select.get_double(14);
+      if (!select.is_null(15)) s.generalization_px = select.get_double(15);
+      const bool converged = select.get_int(16) != 0;
+      s.time_us = select.get_double(18);
+      if (!select.is_null(19)) s.ambiguity_ratio = select.get_double(19);
+      if (converged) {
+        s.status = SampleStatus::kConverged;
+        const int which = scope == "0" ? 0 : scope == "target" ? 1 : -1;
+        if (which >= 0) {
+          FrameRotations& fr = frame_rotations[solver];
+          fr.has[which] = true;
+          for (int k = 0; k < 9; ++k)
+            fr.R[which][k] = select.get_double(4 + k);
+        }
+      } else {
+        const std::string termination = select.get_text(17);
+        if (is_skipped(termination)) {
+          s.status = SampleStatus::kSkipped;
+        } else {
+          s.status = SampleStatus::kFailed;
+          ++target.failures_by_termination[termination];
+        }
+      }
+      target.samples.push_back(s);
+    }
+    flush_frame();
+    for (const auto& [key, index] : key_index)
+      data.solvers.push_back(std::move(solvers[index]));  // map order: by solver, then scope
+  }
+
+  {
+    sqlite::Statement select(connection, kDetectionsQuery);
+    select.bind(1, id);
+    std::map<int, CornerSeries> series;
+    std::int64_t current_plan = -1;
+    while (select.step()) {
+      const std::int64_t plan = select.get_int64(0);
+      if (plan != current_plan) {
+        if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
+        current_plan = plan;
+      }
+      CornerSeries& s = series[select.get_int(2)];
+      std::array<double, 8> c;
+      for (int k = 0; k < 8; ++k)
+        c[k] = select.get_double(3 + k);
+      s.corners.push_back(c);
+      s.edge.add(select.get_double(11));
+    }
+    if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
+  }
+  return data;
+}
+
+}  // namespace db::report

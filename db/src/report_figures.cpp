@@ -1,0 +1,248 @@
+// The figures of the report: the paper's Figs. 8, 9, 11 and 12 per scope,
+// and those of the statistics beyond the paper. With a baseline each series
+// is drawn again, dashed, from the baseline's study.
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+#include "report_document.hpp"
+#include "report_study.hpp"
+
+namespace db::report {
+namespace {
+
+using ClassValue = std::function<double(const DistanceClassStudy&)>;
+
+std::size_t solver_index(const RunStudy& study, const std::string& solver) {
+  std::vector<std::string> names;
+  for (const SolverStudy& s : study.solvers)
+    if (std::find(names.begin(), names.end(), s.solver) == names.end()) names.push_back(s.solver);
+  return static_cast<std::size_t>(std::find(names.begin(), names.end(), solver) - names.begin());
+}
+
+double centre(const DistanceClassStudy& c) {
+  return 0.5 * (c.lower_m + c.upper_m);
+}
+
+svg::Series class_series(const SolverStudy& s, const ClassValue& value, const ClassValue& error,
+                         const std::string& label, const std::string& colour, bool dashed) {
+  svg::Series out;
+  out.label = label;
+  out.style = svg::SeriesStyle::kLineAndMarkers;
+  out.dashed = dashed;
+  out.colour = colour;
+  for (const DistanceClassStudy& c : s.classes) {
+    out.x.push_back(centre(c));
+    out.y.push_back(value(c));
+    if (error) {
+      const double e = error(c);
+      out.y_error.push_back(std::isfinite(e) ? e : kNaN);
+    }
+  }
+  return out;
+}
+
+// One figure of a per-class figure of every solver of a scope (and the
+// baseline's, dashed).
+svg::Figure class_figure(const ReportInput& in, const std::string& scope, const std::string& id,
+                         const std::string& title, svg::Axis y, const ClassValue& value,
+                         const ClassValue& error, const std::string& caption) {
+  svg::Figure f;
+  f.id = id;
+  f.title = title;
+  f.x = {"true distance", "m", false, 0.10, 1.00};
+  f.y = std::move(y);
+  f.caption = caption;
+  f.width_px = 760;
+  f.height_px = 440;
+  for (const SolverStudy& s : in.study.solvers) {
+    if (s.scope != scope || s.used == 0) continue;
+    const std::string colour = colour_of(solver_index(in.study, s.solver));
+    f.series.push_back(class_series(s, value, error, s.solver, colour, false));
+    if (in.baseline) {
+      if (const SolverStudy* b = in.baseline->find(s.solver, scope)) {
+        f.series.push_back(class_series(*b, value, error, s.solver + " (baseline)", colour, true));
+      }
+    }
+  }
+  return f;
+}
+
+svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
+  svg::Figure f;
+  f.id = "fig12-" + scope;
+  f.title = "Estimated against true distance, scope " + scope + " (paper Fig. 12)";
+  f.x = {"true distance", "m", false, std::nullopt, std::nullopt};
+  f.y = {"estimated distance", "m", false, std::nullopt, std::nullopt};
+  f.caption = "Markers: each position's mean estimate (at most " +
+              std::to_string(in.study.options.max_points_per_series) +
+              " positions per solver drawn); lines: the least-squares fit over every estimate "
+              "(dashed: the baseline's fit).";
+  f.width_px = 760;
+  f.height_px = 520;
+  for (const SolverStudy& s : in.study.solvers) {
+    if (s.scope != scope || !s.ols) continue;
+    const std::string colour = colour_of(solver_index(in.study, s.solver));
+    svg::Series points{s.solver, s.plot_true_m, s.plot_estimated_m, {}, svg::SeriesStyle::kMarkers,
+                       false,    colour};
+    f.series.push_back(points);
+    const auto [lo, hi] = std::minmax_element(s.plot_true_m.begin(), s.plot_true_m.end());
+    auto line = [&](const stats::LineFit& fit, bool dashed, const std::string& label) {
+      svg::Series l;
+      l.label = label;
+      l.style = svg::SeriesStyle::kLine;
+      l.dashed = dashed;
+      l.colour = colour;
+      for (double x : {*lo, *hi}) {
+        l.x.push_back(x);
+        l.y.push_back(fit.slope * x + fit.intercept);
+      }
+      return l;
+    };
+    f.series.push_back(line(*s.ols, false, ""));
+    if (in.baseline) {
+      const SolverStudy* b = in.baseline->find(s.solver, scope);
+      if (b != nullptr && b->ols)
+        f.series.push_back(line(*b->ols, true, s.solver + " (baseline fit)"));
+    }
+  }
+  return f;
+}
+
+double fraction(std::size_t k, std::size_t n) {
+  return n > 0 ? static_cast<double>(k) / static_cast<double>(n) : kNaN;
+}
+
+}  // namespace
+
+void add_paper_figures(const ReportInput& in, const std::string& scope, Section& sec) {
+  const std::string where = " (scope " + scope + ")";
+  sec.figure(class_figure(
+      in, scope, "fig8-" + scope, "Reconstruction error against distance" + where,
+      {"reprojection error", "px", false, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.reprojection_px.mean; },
+      [](const DistanceClassStudy& c) { return c.reprojection_px.sd; },
+      "Mean RMS reprojection error per distance class, bars ± 1 sd (paper Fig. 8)."));
+  if (scope == "0") {
+    sec.figure(class_figure(
+        in, scope, "fig9-0", "Generalization error against distance" + where,
+        {"generalization error", "px", false, std::nullopt, std::nullopt},
+        [](const DistanceClassStudy& c) { return c.generalization_px.mean; },
+        [](const DistanceClassStudy& c) { return c.generalization_px.sd; },
+        "Mean RMS reprojection error of the other markers' corners with the pose marker's "
+        "pose, bars ± 1 sd (paper Fig. 9)."));
+  }
+  sec.figure(class_figure(
+      in, scope, "fig11-mean-" + scope, "Mean distance error per class" + where,
+      {"estimated - true distance", "m", false, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.error_m.mean; },
+      [](const DistanceClassStudy& c) { return c.error_m.sd; },
+      "Mean distance error in the ten distance classes, bars ± 1 sd (paper Fig. 11)."));
+  sec.figure(class_figure(
+      in, scope, "fig11-variance-" + scope, "Variance of the distance error per class" + where,
+      {"variance of the distance error", "m²", true, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.error_m.variance; }, nullptr,
+      "Variance of the distance error in the ten distance classes (paper Fig. 11), log scale."));
+  sec.figure(fit_figure(in, scope));
+  sec.figure(class_figure(
+      in, scope, "jitter-" + scope, "Jitter per class" + where,
+      {"jitter (sd over the frames of a position)", "m", true, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.jitter_m; }, nullptr,
+      "Pooled standard deviation of the distance over the frames of one position: the "
+      "noise part of the error, to compare with the bias below."));
+  sec.figure(class_figure(
+      in, scope, "bias-" + scope, "Bias per class" + where,
+      {"bias (mean over positions of their mean error)", "m", false, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.bias_m; },
+      [](const DistanceClassStudy& c) { return c.bias_sd_m; },
+      "Mean over positions of (position's mean estimate - true distance), bars ± 1 sd over "
+      "positions: the systematic part of the error."));
+  sec.figure(class_figure(
+      in, scope, "efficiency-" + scope, "Efficiency per class" + where,
+      {"variance / Cramér-Rao bound", "", true, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.efficiency; }, nullptr,
+      "Frame-to-frame variance of the distance over sigma_corner² times the position's "
+      "Cramér-Rao distance bound² (1 = efficient). sigma_corner: pooled frame-to-frame sd of "
+      "the detected corners in the class."));
+}
+
+void add_beyond_figures(const ReportInput& in, Section& sec) {
+  const RunStudy& st = in.study;
+  // Ambiguity and flips against distance and viewing angle.
+  for (const bool by_angle : {false, true}) {
+    if (by_angle && !st.viewing_angles_recorded) continue;
+    svg::Figure f;
+    f.id = by_angle ? "ambiguity-angle" : "ambiguity-distance";
+    f.title = std::string("Planar ambiguity and flips against ") +
+              (by_angle ? "viewing angle" : "distance");
+    f.x = by_angle ? svg::Axis{"viewing angle at the true pose", "deg", false, 0.0, 90.0}
+                   : svg::Axis{"true distance", "m", false, 0.10, 1.00};
+    f.y = {"fraction of estimates", "", false, 0.0, std::nullopt};
+    f.caption = "Solid: ambiguous estimates (ambiguity_ratio >= " +
+                num(st.options.ambiguity_ratio_threshold, 3) +
+                "); dashed: flips (pose-marker rotation more than " +
+                num(st.options.flip_angle_deg, 3) +
+                " degrees from the whole-target rotation of the same solver and frame).";
+    f.width_px = 760;
+    f.height_px = 440;
+    for (const SolverStudy& s : st.solvers) {
+      const std::string colour = colour_of(solver_index(st, s.solver));
+      svg::Series amb{s.solver + " " + s.scope + " ambiguous", {},    {},    {},
+                      svg::SeriesStyle::kLineAndMarkers,       false, colour};
+      svg::Series flip{
+          s.solver + " flips", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, true, colour};
+      auto add = [&](double x, std::size_t ac, std::size_t a, std::size_t fc, std::size_t fl) {
+        amb.x.push_back(x);
+        amb.y.push_back(fraction(a, ac));
+        flip.x.push_back(x);
+        flip.y.push_back(fraction(fl, fc));
+      };
+      if (by_angle) {
+        for (const AngleClassStudy& c : s.by_viewing_angle)
+          add(0.5 * (c.lower_deg + c.upper_deg), c.ambiguity_checked, c.ambiguous, c.flip_checked,
+              c.flips);
+      } else {
+        for (const DistanceClassStudy& c : s.classes)
+          add(centre(c), c.ambiguity_checked, c.ambiguous, c.flip_checked, c.flips);
+      }
+      if (s.ambiguity_checked > 0) f.series.push_back(amb);
+      if (s.flip_checked > 0) f.series.push_back(flip);
+    }
+    sec.figure(std::move(f));
+  }
+  // Detection against marker size.
+  if (!st.marker_sizes.empty()) {
+    svg::Figure rate;
+    rate.id = "detection-rate";
+    rate.title = "Detection rate against marker size";
+    rate.x = {"projected marker side at the true pose", "px", false, std::nullopt, std::nullopt};
+    rate.y = {"detected / visible", "", false, 0.0, 1.05};
+    rate.caption = "Fraction of (visible marker, frame) pairs in which the marker was detected.";
+    svg::Figure quality;
+    quality.id = "corner-quality";
+    quality.title = "Corner quality against marker size";
+    quality.x = rate.x;
+    quality.y = {"px", "px", true, std::nullopt, std::nullopt};
+    quality.caption =
+        "Edge-fit residual (RMS of edge samples about the fitted sides) and corner jitter "
+        "(pooled frame-to-frame sd of the corners), per marker-size class.";
+    svg::Series r{"detection rate", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, false, ""};
+    svg::Series edge{"edge-fit residual", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, false, ""};
+    svg::Series jitter{"corner jitter", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, true, ""};
+    for (const MarkerSizeClass& m : st.marker_sizes) {
+      const double x = 0.5 * (m.lower_px + m.upper_px);
+      r.x.push_back(x);
+      r.y.push_back(fraction(m.detected, m.expected));
+      edge.x.push_back(x);
+      edge.y.push_back(m.edge_fit_residual_px.mean);
+      jitter.x.push_back(x);
+      jitter.y.push_back(m.corner_jitter_px);
+    }
+    rate.series.push_back(r);
+    quality.series = {edge, jitter};
+    if (st.visible_markers_recorded) sec.figure(std::move(rate));
+    sec.figure(std::move(quality));
+  }
+}
+
+}  // namespace db::report

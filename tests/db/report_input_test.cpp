@@ -1,0 +1,155 @@
+// A report of unusable input fails with ReportInputError naming the file and
+// what was expected; and the report's queries use the indexes.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <fstream>
+#include <iostream>
+
+#include "db/report.hpp"
+#include "db/store.hpp"
+#include "report_data.hpp"
+#include "store_fixture.hpp"
+#include "synthetic_run.hpp"
+
+namespace {
+
+using rig_test::SyntheticRunSpec;
+
+SyntheticRunSpec small_spec() {
+  SyntheticRunSpec spec;
+  spec.positions = 12;
+  spec.solvers = {rig_test::paper_like_solvers()[1]};
+  return spec;
+}
+
+void exec(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* error = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error);
+  const std::string message = error ? error : "";
+  sqlite3_free(error);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << message;
+}
+
+// The message of the ReportInputError that study_run throws ("" if none).
+std::string input_error(const std::string& path, db::ReportOptions options = {}) {
+  try {
+    db::study_run(path, options);
+  } catch (const db::ReportInputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ReportInput, AMissingFileIsNamedAndNotCreated) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("nope.db");
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("no such file"), std::string::npos) << message;
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(ReportInput, AnotherProgramsSqliteFileIsRefusedUnchanged) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("other.db");
+  exec(path, "CREATE TABLE notes (text TEXT); INSERT INTO notes VALUES ('hello');");
+  const auto before = std::filesystem::file_size(path);
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("not a rig run database"), std::string::npos) << message;
+  EXPECT_EQ(std::filesystem::file_size(path), before);
+}
+
+TEST(ReportInput, AFileThatIsNotSqliteIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("text.db");
+  std::ofstream(path) << "this is not a database, just text long enough to have a header........"
+                         "..........................................................\n";
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("not a SQLite database"), std::string::npos) << message;
+}
+
+TEST(ReportInput, ANewerSchemaIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("newer.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  exec(path, "PRAGMA user_version = " + std::to_string(db::Store::kSchemaVersion + 1));
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("newer"), std::string::npos) << message;
+}
+
+TEST(ReportInput, ADatabaseWithoutACompletedRunIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("running.db");
+  SyntheticRunSpec spec = small_spec();
+  spec.status = db::RunStatus::kRunning;
+  const std::int64_t id = rig_test::write_synthetic_run(path, spec).run_id;
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("no completed run"), std::string::npos) << message;
+  // Named explicitly, a running run is refused too.
+  db::ReportOptions options;
+  options.run_id = id;
+  EXPECT_NE(input_error(path, options).find("still running"), std::string::npos);
+}
+
+TEST(ReportInput, AnUnknownRunIsNamedWithTheRunsThereAre) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("run.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  db::ReportOptions options;
+  options.run_id = 42;
+  const std::string message = input_error(path, options);
+  EXPECT_NE(message.find("no run 42 (runs: 1)"), std::string::npos) << message;
+}
+
+TEST(ReportInput, PicksTheLatestCompletedRunByDefault) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("runs.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  const std::int64_t second = rig_test::write_synthetic_run(path, small_spec()).run_id;
+  SyntheticRunSpec aborted = small_spec();
+  aborted.status = db::RunStatus::kAborted;
+  const std::int64_t third = rig_test::write_synthetic_run(path, aborted).run_id;
+  EXPECT_EQ(db::study_run(path, {}).run.id, second);
+  db::ReportOptions options;
+  options.run_id = third;
+  EXPECT_EQ(db::study_run(path, options).run.status, db::RunStatus::kAborted);
+}
+
+// EXPLAIN QUERY PLAN of every pass over estimates, detections and frames,
+// on a file with several runs: only SEARCHes through indexes, no SCAN.
+TEST(ReportQueries, UseTheIndexesAndScanNoTable) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("runs.db");
+  for (int i = 0; i < 3; ++i)
+    rig_test::write_synthetic_run(path, small_spec());
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  for (const char* query :
+       {db::report::kEstimatesQuery, db::report::kDetectionsQuery, db::report::kFramesQuery}) {
+    sqlite3_stmt* plan = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(db, (std::string("EXPLAIN QUERY PLAN ") + query).c_str(), -1,
+                                 &plan, nullptr),
+              SQLITE_OK)
+        << sqlite3_errmsg(db);
+    sqlite3_bind_int64(plan, 1, 2);
+    std::string details;
+    int searches = 0;
+    while (sqlite3_step(plan) == SQLITE_ROW) {
+      const std::string detail = reinterpret_cast<const char*>(sqlite3_column_text(plan, 3));
+      details += detail + "\n";
+      EXPECT_EQ(detail.rfind("SCAN", 0), std::string::npos) << query << "\n" << detail;
+      searches += detail.rfind("SEARCH", 0) == 0 ? 1 : 0;
+    }
+    sqlite3_finalize(plan);
+    EXPECT_GE(searches, 2) << details;
+    EXPECT_NE(details.find("INDEX"), std::string::npos) << details;
+    std::cout << details;
+  }
+  sqlite3_close(db);
+}
+
+}  // namespace

@@ -1,0 +1,102 @@
+// Report::write: report.html, report.json and the CSV tables say the same
+// thing, and hold every figure and table.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "db/report.hpp"
+#include "store_fixture.hpp"
+#include "synthetic_run.hpp"
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+class ReportOutput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_test::SyntheticRunSpec spec;
+    spec.positions = 80;
+    spec.solvers = rig_test::paper_like_solvers();
+    rig_test::write_synthetic_run(dir_.file("run.db"), spec);
+    spec.seed = 2;
+    rig_test::write_synthetic_run(dir_.file("baseline.db"), spec);
+  }
+  db_test::ScratchDir dir_;
+};
+
+TEST_F(ReportOutput, WritesHtmlJsonAndCsvThatAgree) {
+  const db::Report report(dir_.file("run.db"), db::ReportOptions{});
+  const db::ReportFiles files = report.write(dir_.file("out"));
+  const std::string html = slurp(files.html);
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+
+  // Every figure of the JSON is on the page, and the paper's figures are there.
+  ASSERT_TRUE(json["figures"].is_array());
+  std::vector<std::string> ids;
+  for (const auto& f : json["figures"]) {
+    ids.push_back(f["id"]);
+    EXPECT_NE(html.find("id=\"" + ids.back() + "\""), std::string::npos) << ids.back();
+    ASSERT_FALSE(f["series"].empty()) << ids.back();
+    for (const auto& s : f["series"])
+      EXPECT_EQ(s["x"].size(), s["y"].size());
+  }
+  for (const char* id : {"fig8-0", "fig9-0", "fig11-mean-0", "fig11-variance-0", "fig12-0",
+                         "fig8-target", "jitter-0", "bias-0", "efficiency-0", "ambiguity-distance",
+                         "ambiguity-angle", "detection-rate", "corner-quality"}) {
+    EXPECT_NE(std::find(ids.begin(), ids.end(), id), ids.end()) << id;
+  }
+  // Every table is a CSV file whose first line is the table's header.
+  ASSERT_EQ(files.csv.size(), json["tables"].size());
+  for (const auto& t : json["tables"]) {
+    const std::string csv = slurp(dir_.file("out/" + t["id"].get<std::string>() + ".csv"));
+    std::string header;
+    for (const auto& h : t["header"])
+      header += (header.empty() ? "" : ",") + h.get<std::string>();
+    EXPECT_EQ(csv.substr(0, csv.find("\r\n")), header) << t["id"];
+    EXPECT_NE(html.find("id=\"" + t["id"].get<std::string>() + "\""), std::string::npos);
+  }
+  // The numbers are the study's.
+  const db::SolverStudy* s = report.study().find("hybrid_oi", "0");
+  ASSERT_TRUE(s && s->ols);
+  bool found = false;
+  for (const auto& j : json["study"]["solvers"]) {
+    if (j["solver"] != "hybrid_oi" || j["scope"] != "0") continue;
+    found = true;
+    EXPECT_EQ(j["ols"]["slope"].get<double>(), s->ols->slope);
+    EXPECT_EQ(j["ols"]["slope_se"].get<double>(), s->ols->slope_se);
+    EXPECT_EQ(j["classes"].size(), 10u);
+  }
+  EXPECT_TRUE(found);
+  // The paper's values are beside ours.
+  EXPECT_NE(html.find("paper: H. OI"), std::string::npos);
+  EXPECT_NE(html.find("1.0084"), std::string::npos);  // paper Table 4, hybrid OI slope
+  EXPECT_FALSE(json["regressed"].get<bool>());
+}
+
+TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
+  const db::Report report(dir_.file("run.db"), db::ReportOptions{},
+                          db::RunReference::parse(dir_.file("baseline.db")));
+  const db::ReportFiles files = report.write(dir_.file("out"));
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  ASSERT_TRUE(json.contains("baseline"));
+  EXPECT_FALSE(json["comparison"].empty());
+  for (const auto& f : json["figures"]) {
+    if (f["section"].get<std::string>().rfind("paper-", 0) != 0) continue;
+    bool baseline = false;
+    for (const auto& s : f["series"])
+      baseline |= s["label"].get<std::string>().find("baseline") != std::string::npos;
+    EXPECT_TRUE(baseline) << f["id"];
+  }
+  EXPECT_NE(slurp(files.html).find("Against the baseline"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir_.file("out/comparison.csv")));
+}
+
+}  // namespace
