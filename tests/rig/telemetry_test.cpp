@@ -245,12 +245,32 @@ TEST(ControlState, WaitWhilePausedReturnsAtOnceUnlessPaused) {
   EXPECT_EQ(state.abort_reason(), "operator") << "the first reason is kept";
 }
 
+// Runs `body` on a thread standing in for the controller. When it goes out
+// of scope (also after a failed assertion) it aborts the sweep, so a body
+// blocked in wait_while_paused() ends, and joins.
+class ControllerThread {
+ public:
+  template <class Body>
+  ControllerThread(rig::ControlState& state, Body body) : state_(state), thread_(body) {}
+  ~ControllerThread() {
+    state_.request_abort("end of test");
+    join();
+  }
+  void join() {
+    if (thread_.joinable()) thread_.join();
+  }
+
+ private:
+  rig::ControlState& state_;
+  std::thread thread_;
+};
+
 TEST(ControlState, ControllerPauseHoldsUntilResume) {
   rig::ControlState state;
   state.set_paused_by_controller(true);
   EXPECT_TRUE(state.pause_requested());
   std::atomic<int> result{-1};
-  std::thread sweep([&] { result = state.wait_while_paused() ? 1 : 0; });
+  ControllerThread sweep(state, [&] { result = state.wait_while_paused() ? 1 : 0; });
   ASSERT_TRUE(eventually([&] { return state.paused(); }));
   EXPECT_EQ(result, -1);
   state.request_resume();
@@ -260,23 +280,16 @@ TEST(ControlState, ControllerPauseHoldsUntilResume) {
   EXPECT_FALSE(state.paused());
 }
 
-// A fake sweep: one step per "position" (1 ms of pretend work), checking
+// A fake sweep loop: one step per "position" (1 ms of pretend work),
 // wait_while_paused() between steps as the controller does.
-class FakeSweep {
- public:
-  explicit FakeSweep(rig::ControlState& state)
-      : thread_([this, &state] {
-          while (state.wait_while_paused()) {
-            ++steps;
-            std::this_thread::sleep_for(1ms);  // the position's work, not synchronisation
-          }
-        }) {}
-  ~FakeSweep() { thread_.join(); }
-  std::atomic<int> steps{0};
-
- private:
-  std::thread thread_;
-};
+auto fake_sweep(rig::ControlState& state, std::atomic<int>& steps) {
+  return [&state, &steps] {
+    while (state.wait_while_paused()) {
+      ++steps;
+      std::this_thread::sleep_for(1ms);  // the position's work, not synchronisation
+    }
+  };
+}
 
 class Control : public ::testing::Test {
  protected:
@@ -308,29 +321,28 @@ TEST_F(Control, PauseAndResumeActBeforeTheStatusIsTaken) {
 }
 
 TEST_F(Control, PausedSweepStopsAdvancingAndContinuesAfterResume) {
-  rig::ControlState* s = &state;
-  {
-    FakeSweep sweep(*s);
-    ASSERT_TRUE(eventually([&] { return sweep.steps >= 3; }));
-    ASSERT_EQ(send("pause")["ok"], true);
-    ASSERT_TRUE(eventually([&] { return state.paused(); }));
-    const int held_at = sweep.steps;
-    // Several round trips through the socket while held: the loop is blocked
-    // inside wait_while_paused, so its count cannot move.
-    for (int i = 0; i < 5; ++i)
-      EXPECT_EQ(send("status")["status"]["state"], "paused");
-    EXPECT_EQ(sweep.steps, held_at);
-    ASSERT_EQ(send("resume")["ok"], true);
-    EXPECT_TRUE(eventually([&] { return sweep.steps > held_at + 2; }));
-    EXPECT_EQ(send("abort")["ok"], true);  // ends the loop so the destructor can join
-  }
+  std::atomic<int> steps{0};
+  ControllerThread sweep(state, fake_sweep(state, steps));
+  ASSERT_TRUE(eventually([&] { return steps >= 3; }));
+  ASSERT_EQ(send("pause")["ok"], true);
+  ASSERT_TRUE(eventually([&] { return state.paused(); }));
+  const int held_at = steps;
+  // Several round trips through the socket while held: the loop is blocked
+  // inside wait_while_paused, so its count cannot move.
+  for (int i = 0; i < 5; ++i)
+    EXPECT_EQ(send("status")["status"]["state"], "paused");
+  EXPECT_EQ(steps, held_at);
+  ASSERT_EQ(send("resume")["ok"], true);
+  EXPECT_TRUE(eventually([&] { return steps > held_at + 2; }));
+  EXPECT_EQ(send("abort")["ok"], true);
+  sweep.join();
   EXPECT_EQ(state.abort_reason(), "abort requested over the control socket");
 }
 
 TEST_F(Control, AbortWhilePausedEndsTheWaitWithFalseAndKeepsTheReason) {
   send("pause");
   std::atomic<int> result{-1};
-  std::thread sweep([&] { result = state.wait_while_paused() ? 1 : 0; });
+  ControllerThread sweep(state, [&] { result = state.wait_while_paused() ? 1 : 0; });
   ASSERT_TRUE(eventually([&] { return state.paused(); }));
   const json reply = send("abort", "lens cap on");
   sweep.join();
