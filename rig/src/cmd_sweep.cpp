@@ -107,6 +107,28 @@ void check_camera(vision::FrameSource& camera, const SweepConfig& config) {
   }
 }
 
+// Opens the camera and checks one frame. A GigE camera whose previous
+// controller died (kill -9, power loss of the host) still holds that
+// controller's stream until its heartbeat timeout expires (a few seconds), so
+// a camera that refuses us or sends nothing is asked again for up to 15 s.
+std::unique_ptr<vision::FrameSource> open_camera(const SweepConfig& config) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(15);
+  for (int attempt = 1;; ++attempt) {
+    auto camera = vision::make_frame_source(config.camera_spec, config.capture);
+    try {
+      camera->open();
+      check_camera(*camera, config);
+      return camera;
+    } catch (const vision::CaptureError& e) {
+      if (std::chrono::steady_clock::now() > deadline) throw;
+      std::cerr << "rig sweep: camera attempt " << attempt << ": " << e.what()
+                << "; asking again (a controller that died may hold the camera until its "
+                << "heartbeat expires)\n";
+      std::this_thread::sleep_for(std::chrono::milliseconds(500));
+    }
+  }
+}
+
 int run_sweep(const SweepArgs& args) {
   SweepConfig config = load_sweep_config(args.sweep_file);
   const std::string database = args.database.empty() ? config.database_path : args.database;
@@ -117,10 +139,7 @@ int run_sweep(const SweepArgs& args) {
   validate_endpoints(endpoints);
 
   // The camera first: a wrong calibration must stop the sweep before the bench moves.
-  std::unique_ptr<vision::FrameSource> camera =
-      vision::make_frame_source(config.camera_spec, config.capture);
-  camera->open();
-  check_camera(*camera, config);
+  std::unique_ptr<vision::FrameSource> camera = open_camera(config);
 
   motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
   if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
@@ -149,7 +168,9 @@ int run_sweep(const SweepArgs& args) {
     run_id = store.start_run(describe_run(config, plan));
   }
 
-  if (config.home_first) {
+  // Homing is needed once per power-up of the drive; a resumed run on a homed
+  // bench does not drive it home and back.
+  if (config.home_first && !bench.status().homed) {
     bench.home();
     bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
   }
@@ -163,6 +184,9 @@ int run_sweep(const SweepArgs& args) {
     if (!live) return {{"state", "starting"}, {"run_id", run_id}};
     return live->status();
   });
+  std::cout << "rig sweep: run " << run_id << " in " << store.path() << ", " << plan.size()
+            << " positions (" << plan.description() << "), telemetry " << publisher.endpoint()
+            << ", control " << server.endpoint() << std::endl;
   if (args.wait_subscribers > 0 &&
       !publisher.wait_for_subscribers(
           args.wait_subscribers,
@@ -190,9 +214,6 @@ int run_sweep(const SweepArgs& args) {
     }
   });
 
-  std::cout << "rig sweep: run " << run_id << " in " << store.path() << ", " << plan.size()
-            << " positions (" << plan.description() << "), telemetry " << publisher.endpoint()
-            << ", control " << server.endpoint() << std::endl;
   RunOutcome outcome;
   {
     SignalWatch signals(control);

@@ -162,7 +162,7 @@ struct Controller::Impl {
   // run is to be aborted.
   bool honour_pause(std::optional<std::int64_t> index) {
     if (control.abort_requested()) return false;
-    if (!control.paused()) return true;
+    if (!control.pause_requested()) return true;
     store.record_event(run_id, "pause",
                        control.paused_by_controller() ? "paused after a fault" : "pause requested",
                        index);
