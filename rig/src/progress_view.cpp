@@ -291,13 +291,17 @@ void ProgressPrinter::update(const json& message) {
   out_ << std::flush;
 }
 
-bool stdout_is_terminal() {
-  return ::isatty(STDOUT_FILENO) == 1;
+bool is_terminal(int file_descriptor) {
+  return ::isatty(file_descriptor) == 1;
 }
 
-int terminal_width(int fallback) {
+bool stdout_is_terminal() {
+  return is_terminal(STDOUT_FILENO);
+}
+
+int terminal_width(int fallback, int file_descriptor) {
   winsize size{};
-  if (::isatty(STDOUT_FILENO) == 1 && ::ioctl(STDOUT_FILENO, TIOCGWINSZ, &size) == 0 &&
+  if (is_terminal(file_descriptor) && ::ioctl(file_descriptor, TIOCGWINSZ, &size) == 0 &&
       size.ws_col > 0)
     return size.ws_col;
   return fallback;

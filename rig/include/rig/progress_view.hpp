@@ -129,9 +129,11 @@ class ProgressPrinter {
   ProgressView view_;
 };
 
-// Whether standard output is a terminal, and its width in columns (`fallback`
-// if it is not a terminal or does not say).
+// Whether a file descriptor (1 standard output, 2 standard error) is a
+// terminal, and its width in columns (`fallback` if it is not a terminal or
+// does not say).
+bool is_terminal(int file_descriptor);
 bool stdout_is_terminal();
-int terminal_width(int fallback = 80);
+int terminal_width(int fallback = 80, int file_descriptor = 1);
 
 }  // namespace rig
