@@ -277,6 +277,25 @@ TEST(ProgressView, SurvivesMissingAndMistypedFields) {
   EXPECT_FALSE(view.dashboard(80).empty());
 }
 
+TEST(ProgressView, DashboardShowsRunProgressSolversAndTheLastFault) {
+  rig::ProgressView view;
+  EXPECT_EQ(view.dashboard(80).rfind("waiting for telemetry\n", 0), 0u);
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update({{"type", "fault"},
+               {"plan_index", 1},
+               {"kind", "link"},
+               {"message", "modbus timeout"},
+               {"action", "retry"}});
+  const std::string screen = view.dashboard(80);
+  EXPECT_EQ(screen.rfind("run 7  config/sweeps/ci.toml  ->  /tmp/run.db\n", 0), 0u) << screen;
+  EXPECT_NE(screen.find(view.progress_line(80) + "\n"), std::string::npos) << screen;
+  EXPECT_NE(screen.find(view.solver_table()), std::string::npos) << screen;
+  EXPECT_NE(screen.find("last fault: fault at position 1: link: modbus timeout (action: retry)"),
+            std::string::npos)
+      << screen;
+}
+
 TEST(ProgressPrinter, WithoutATerminalPrintsOneLinePerMessage) {
   std::ostringstream out;
   rig::ProgressPrinter printer(out, false, 80);
