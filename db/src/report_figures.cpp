@@ -178,11 +178,12 @@ void add_beyond_figures(const ReportInput& in, Section& sec) {
     f.x = by_angle ? svg::Axis{"viewing angle at the true pose", "deg", false, 0.0, 90.0}
                    : svg::Axis{"true distance", "m", false, 0.10, 1.00};
     f.y = {"fraction of estimates", "", false, 0.0, std::nullopt};
-    f.caption = "Solid: ambiguous estimates (ambiguity_ratio >= " +
-                num(st.options.ambiguity_ratio_threshold, 3) +
-                "); dashed: flips (pose-marker rotation more than " +
-                num(st.options.flip_angle_deg, 3) +
-                " degrees from the whole-target rotation of the same solver and frame).";
+    f.caption =
+        "Solid: ambiguous estimates (ambiguity_ratio >= " +
+        num(st.options.ambiguity_ratio_threshold, 3) +
+        "); dashed: flips (pose-marker rotation more than " + num(st.options.flip_angle_deg, 3) +
+        " degrees from the whole-target rotation of the same solver and frame). Solvers with "
+        "none are listed in the ambiguity table only.";
     f.width_px = 760;
     f.height_px = 440;
     for (const SolverStudy& s : st.solvers) {
@@ -205,8 +206,9 @@ void add_beyond_figures(const ReportInput& in, Section& sec) {
         for (const DistanceClassStudy& c : s.classes)
           add(centre(c), c.ambiguity_checked, c.ambiguous, c.flip_checked, c.flips);
       }
-      if (s.ambiguity_checked > 0) f.series.push_back(amb);
-      if (s.flip_checked > 0) f.series.push_back(flip);
+      // Solvers without any ambiguous estimate or flip are in the table only.
+      if (s.ambiguous > 0) f.series.push_back(amb);
+      if (s.flips > 0) f.series.push_back(flip);
     }
     sec.figure(std::move(f));
   }
