@@ -25,6 +25,7 @@
 
 #include "commands.hpp"
 #include "estimate_json.hpp"
+#include "rig/frame_measurement.hpp"
 #include "vision/detector.hpp"
 #include "vision/detector_image.hpp"
 #include "vision/solvers.hpp"
@@ -40,39 +41,6 @@ struct Options {
   bool json = false;
 };
 
-// One scope's estimates: the correspondences of `markers` (pose marker first)
-// through every solver.
-struct ScopeResult {
-  nlohmann::json scope;
-  std::vector<vision::Estimate> estimates;
-  std::string error;  // correspondences the solvers cannot take
-};
-
-ScopeResult solve_scope(const nlohmann::json& scope,
-                        const std::vector<const vision::Detection*>& markers,
-                        const vision::Camera& camera, const vision::Target& target,
-                        const std::vector<std::unique_ptr<vision::PoseSolver>>& solvers) {
-  ScopeResult r{scope, {}, ""};
-  std::vector<Eigen::Vector3d> object_points;
-  std::vector<Eigen::Vector2d> image_points;
-  for (const auto* d : markers) {
-    const auto corners = target.corners_m(d->id);
-    for (int k = 0; k < 4; ++k) {
-      object_points.push_back(corners[k]);
-      image_points.push_back(d->corners_px[k]);
-    }
-  }
-  try {
-    const vision::Correspondences c =
-        vision::make_correspondences(camera, object_points, image_points);
-    for (const auto& solver : solvers)
-      r.estimates.push_back(solver->solve(c));
-  } catch (const vision::InputError& e) {
-    r.error = e.what();
-  }
-  return r;
-}
-
 nlohmann::json detection_to_json(const vision::Detection& d) {
   nlohmann::json corners = nlohmann::json::array();
   for (const auto& c : d.corners_px)
@@ -86,55 +54,58 @@ nlohmann::json detection_to_json(const vision::Detection& d) {
             {"edge_fit_residual_px", d.quality.edge_fit_residual_px}}}};
 }
 
-void print_text(const std::string& image, const std::vector<vision::Detection>& detections,
-                const std::vector<ScopeResult>& scopes) {
-  std::printf("%s: %zu marker%s\n", image.c_str(), detections.size(),
-              detections.size() == 1 ? "" : "s");
-  for (const auto& d : detections) {
+// The scope as rig detect's JSON has always given it: the pose marker's id
+// as a number, "target" as text.
+nlohmann::json scope_json(const std::string& scope) {
+  return scope == "target" ? nlohmann::json(scope) : nlohmann::json(std::stoi(scope));
+}
+
+void print_text(const std::string& image, const FrameMeasurement& m) {
+  std::printf("%s: %zu marker%s\n", image.c_str(), m.detections.size(),
+              m.detections.size() == 1 ? "" : "s");
+  for (const auto& d : m.detections) {
     std::printf("  id %2d rot %d  corners", d.id, d.rotation);
     for (const auto& c : d.corners_px)
       std::printf(" (%.3f, %.3f)", c.x(), c.y());
     std::printf("  contrast %.0f  bits corrected %d  edge residual %.3f px\n", d.quality.contrast,
                 d.quality.bits_corrected, d.quality.edge_fit_residual_px);
   }
-  for (const auto& s : scopes) {
-    const std::string scope = s.scope.is_string() ? s.scope.get<std::string>()
-                                                  : "marker " + std::to_string(s.scope.get<int>());
-    if (!s.error.empty()) {
-      std::printf("  %s: no estimate: %s\n", scope.c_str(), s.error.c_str());
+  for (const auto& error : m.scope_errors)
+    std::printf("  no estimate: %s\n", error.c_str());
+  std::string scope;
+  for (const auto& s : m.estimates) {
+    if (s.scope != scope) {
+      scope = s.scope;
+      std::printf("  %s:\n  %-20s %-9s %11s %10s %9s %9s\n",
+                  scope == "target" ? "target" : ("marker " + scope).c_str(), "solver", "converged",
+                  "distance_m", "reproj_px", "time_us", "ambiguity");
+    }
+    const vision::Estimate& e = s.estimate;
+    if (!e.applicable()) {
+      std::printf("  %-20s skipped: %s\n", e.solver.c_str(), e.message.c_str());
       continue;
     }
-    std::printf("  %s:\n  %-20s %-9s %11s %10s %9s %9s\n", scope.c_str(), "solver", "converged",
-                "distance_m", "reproj_px", "time_us", "ambiguity");
-    for (const auto& e : s.estimates) {
-      if (!e.applicable()) {
-        std::printf("  %-20s skipped: %s\n", e.solver.c_str(), e.message.c_str());
-        continue;
-      }
-      const std::string ambiguity =
-          e.ambiguity_ratio ? std::to_string(*e.ambiguity_ratio).substr(0, 6) : "-";
-      std::printf("  %-20s %-9s %11.6f %10.4f %9.1f %9s\n", e.solver.c_str(),
-                  e.converged ? "yes" : "no", e.distance_m, e.reprojection_error_px, e.time_us,
-                  ambiguity.c_str());
-    }
+    const std::string ambiguity =
+        e.ambiguity_ratio ? std::to_string(*e.ambiguity_ratio).substr(0, 6) : "-";
+    std::printf("  %-20s %-9s %11.6f %10.4f %9.1f %9s\n", e.solver.c_str(),
+                e.converged ? "yes" : "no", e.distance_m, e.reprojection_error_px, e.time_us,
+                ambiguity.c_str());
   }
 }
 
 // Returns false when the image could not be used (the error is printed).
-bool detect_one(const std::string& path, const vision::Detector& detector,
-                const vision::Target& target,
-                const std::vector<std::unique_ptr<vision::PoseSolver>>& solvers, bool json) {
-  std::vector<vision::Detection> detections;
+bool detect_one(const std::string& path, const FrameMeasurer& measurer, bool json) {
+  FrameMeasurement m;
   std::string error;
   try {
     const cv::Mat image = vision::read_image(path);
-    const auto& camera = detector.camera();
+    const auto& camera = measurer.camera();
     if (image.cols != camera.width_px() || image.rows != camera.height_px())
       throw vision::ImageError(
           "image '" + path + "': is " + std::to_string(image.cols) + "x" +
           std::to_string(image.rows) + " px but the camera calibration is for " +
           std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) + " px");
-    detections = detector.detect(image);
+    m = measurer.measure(image);
   } catch (const vision::ImageError& e) {
     error = e.what();
   } catch (const std::invalid_argument& e) {  // an image type the detector cannot convert
@@ -151,51 +122,25 @@ bool detect_one(const std::string& path, const vision::Detector& detector,
                 << std::endl;
     return false;
   }
-
-  // The layout's markers, each id once (a second sighting of an id would make
-  // the correspondences ambiguous; it is reported, not used).
-  const vision::Detection* pose_marker = nullptr;
-  std::vector<const vision::Detection*> others;
-  for (size_t i = 0; i < detections.size(); ++i) {
-    const auto& d = detections[i];
-    if (!target.has_marker(d.id) || (i > 0 && detections[i - 1].id == d.id) ||
-        (i + 1 < detections.size() && detections[i + 1].id == d.id))
-      continue;
-    if (d.id == target.pose_marker_id)
-      pose_marker = &d;
-    else
-      others.push_back(&d);
-  }
-  std::vector<ScopeResult> scopes;
-  if (pose_marker)
-    scopes.push_back(
-        solve_scope(pose_marker->id, {pose_marker}, detector.camera(), target, solvers));
-  std::vector<const vision::Detection*> all;
-  if (pose_marker) all.push_back(pose_marker);
-  all.insert(all.end(), others.begin(), others.end());
-  if (!all.empty())
-    scopes.push_back(solve_scope("target", all, detector.camera(), target, solvers));
-
   if (!json) {
-    print_text(path, detections, scopes);
+    print_text(path, m);
     return true;
   }
   nlohmann::json out = {{"image", path},
                         {"detections", nlohmann::json::array()},
                         {"estimates", nlohmann::json::array()}};
-  for (const auto& d : detections)
+  for (const auto& d : m.detections)
     out["detections"].push_back(detection_to_json(d));
-  for (const auto& s : scopes) {
-    if (!s.error.empty()) {
-      out["estimates"].push_back({{"scope", s.scope}, {"error", s.error}});
-      continue;
-    }
-    for (const auto& e : s.estimates) {
-      nlohmann::json j = estimate_to_json(e);
-      j["scope"] = s.scope;
-      if (e.applicable() && !j.contains("ambiguity_ratio")) j["ambiguity_ratio"] = nullptr;
-      out["estimates"].push_back(j);
-    }
+  for (const auto& scope_error : m.scope_errors) {
+    const std::string scope = scope_error.substr(0, scope_error.find(':'));
+    out["estimates"].push_back(
+        {{"scope", scope_json(scope)}, {"error", scope_error.substr(scope.size() + 2)}});
+  }
+  for (const auto& s : m.estimates) {
+    nlohmann::json j = estimate_to_json(s.estimate);
+    j["scope"] = scope_json(s.scope);
+    if (s.estimate.applicable() && !j.contains("ambiguity_ratio")) j["ambiguity_ratio"] = nullptr;
+    out["estimates"].push_back(j);
   }
   std::cout << out.dump() << std::endl;
   return true;
@@ -223,11 +168,10 @@ int run_detect(const Options& o) {
                 << codebook.size() - 1 << ")\n";
       return kExitBadInput;
     }
-  const vision::Detector detector(*camera, codebook);
-  const auto solvers = vision::make_all_solvers();
+  const FrameMeasurer measurer(*camera, *target);
   bool all_ok = true;
   for (const auto& image : o.images)
-    all_ok = detect_one(image, detector, *target, solvers, o.json) && all_ok;
+    all_ok = detect_one(image, measurer, o.json) && all_ok;
   return all_ok ? kExitOk : kExitBadInput;
 }
 
