@@ -1,6 +1,8 @@
 // Run comparison (issue 7 §4): each solver's figures against the baseline's,
 // flagged only where the difference exceeds k standard errors.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include "db/report.hpp"
 #include "db/stats_error.hpp"
@@ -20,8 +22,7 @@ void add(std::vector<ComparedFigure>& out, const SolverStudy& c, const std::stri
   f.candidate = candidate;
   f.baseline = baseline;
   f.difference = d;
-  f.worse = direction > 0 && d.increased();
-  f.better = direction > 0 && d.decreased();
+  f.counted = direction > 0;
   out.push_back(f);
 }
 
@@ -53,6 +54,39 @@ void compare_failure_rate(std::vector<ComparedFigure>& out, const SolverStudy& c
       stats::compare_estimates(x1 / n1, se, x2 / n2, 0.0, k), +1);
 }
 
+// k with two-sided normal tail probability p: erfc(k / sqrt 2) = p, by
+// bisection (erfc is decreasing; 200 halvings of [0, 40] reach rounding).
+double two_sided_normal_k(double p) {
+  double lo = 0.0, hi = 40.0;
+  for (int i = 0; i < 200; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (std::erfc(mid / std::sqrt(2.0)) > p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Bias of each distance class against the baseline's: the positions' mean
+// errors are independent samples, so Welch applies (frames of one position
+// are not independent). Flagged, not counted: tens of classes per solver
+// would make a false alarm likely.
+void compare_classes(std::vector<ComparedFigure>& out, const SolverStudy& c, const SolverStudy& b,
+                     double k) {
+  for (std::size_t i = 0; i < c.classes.size() && i < b.classes.size(); ++i) {
+    const DistanceClassStudy& cc = c.classes[i];
+    const DistanceClassStudy& bc = b.classes[i];
+    stats::Summary cs, bs;
+    cs.count = cc.positions;
+    cs.mean = cc.bias_m;
+    cs.variance = cc.bias_sd_m * cc.bias_sd_m;
+    bs.count = bc.positions;
+    bs.mean = bc.bias_m;
+    bs.variance = bc.bias_sd_m * bc.bias_sd_m;
+    char name[80];
+    std::snprintf(name, sizeof name, "bias (m), class %.2f-%.2f m", cc.lower_m, cc.upper_m);
+    compare_summaries(out, c, name, cs, bs, k, 0);
+  }
+}
+
 }  // namespace
 
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
@@ -77,6 +111,19 @@ std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStu
           0);
     }
     compare_summaries(out, c, "time per pose (µs)", c.time_us, b->time_us, k, 0);
+    compare_classes(out, c, *b, k);
+  }
+  const auto m =
+      std::count_if(out.begin(), out.end(), [](const ComparedFigure& f) { return f.counted; });
+  const double family_k =
+      m > 1
+          ? std::max(k, two_sided_normal_k(std::erfc(k / std::sqrt(2.0)) / static_cast<double>(m)))
+          : k;
+  for (ComparedFigure& f : out) {
+    f.regression_k = family_k;
+    const bool beyond = std::fabs(f.difference.z) > family_k;
+    f.worse = f.counted && beyond && f.difference.difference > 0;
+    f.better = f.counted && beyond && f.difference.difference < 0;
   }
   return out;
 }

@@ -146,7 +146,8 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   {
     std::map<std::pair<std::string, std::string>, std::size_t> key_index;
     std::vector<SolverScopeData> solvers;
-    // Rotations of the current frame by solver: [0] scope "0", [1] "target".
+    // Rotations of the current frame by solver: [0] the pose marker's scope
+    // (a marker id, "0" by default), [1] "target".
     struct FrameRotations {
       bool has[2] = {false, false};
       std::array<double, 9> R[2];
@@ -193,8 +194,8 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
       if (!select.is_null(19)) s.ambiguity_ratio = select.get_double(19);
       if (converged) {
         s.status = SampleStatus::kConverged;
-        const int which = scope == "0" ? 0 : scope == "target" ? 1 : -1;
-        if (which >= 0) {
+        const int which = scope == "target" ? 1 : 0;
+        {
           FrameRotations& fr = frame_rotations[solver];
           fr.has[which] = true;
           for (int k = 0; k < 9; ++k)

@@ -1,5 +1,6 @@
 #include "report_document.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -105,14 +106,18 @@ Document build_document(const ReportInput& in) {
     add_comparison(in, sec);
     doc.sections.push_back(std::move(sec));
   }
-  for (const std::string scope : {"0", "target"}) {
-    bool present = false;
-    for (const SolverStudy& s : in.study.solvers)
-      present |= s.scope == scope;
-    if (!present) continue;
+  // Scopes in order: the pose marker's (its id, "0" by default), then "target".
+  std::vector<std::string> scopes;
+  for (const SolverStudy& s : in.study.solvers) {
+    if (std::find(scopes.begin(), scopes.end(), s.scope) == scopes.end()) scopes.push_back(s.scope);
+  }
+  std::stable_partition(scopes.begin(), scopes.end(),
+                        [](const std::string& s) { return s != "target"; });
+  for (const std::string& scope : scopes) {
     Section sec{"paper-" + scope,
-                scope == "0" ? "The paper's study, pose marker (scope \"0\")"
-                             : "The paper's study, whole target (scope \"target\")",
+                scope != "target"
+                    ? "The paper's study, pose marker (scope \"" + scope + "\")"
+                    : std::string("The paper's study, whole target (scope \"target\")"),
                 {}};
     add_paper_tables(in, scope, sec);
     add_paper_figures(in, scope, sec);

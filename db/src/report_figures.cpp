@@ -123,9 +123,9 @@ void add_paper_figures(const ReportInput& in, const std::string& scope, Section&
       [](const DistanceClassStudy& c) { return c.reprojection_px.mean; },
       [](const DistanceClassStudy& c) { return c.reprojection_px.sd; },
       "Mean RMS reprojection error per distance class, bars ± 1 sd (paper Fig. 8)."));
-  if (scope == "0") {
+  if (scope != "target") {
     sec.figure(class_figure(
-        in, scope, "fig9-0", "Generalization error against distance" + where,
+        in, scope, "fig9-" + scope, "Generalization error against distance" + where,
         {"generalization error", "px", false, std::nullopt, std::nullopt},
         [](const DistanceClassStudy& c) { return c.generalization_px.mean; },
         [](const DistanceClassStudy& c) { return c.generalization_px.sd; },

@@ -239,7 +239,7 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
   }
 
   // Flips: the pose marker's rotation against the whole target's, per frame.
-  if (s.scope == "0") {
+  if (s.scope != "target") {
     const auto it = data.flips.find(s.solver);
     if (it != data.flips.end()) {
       for (const FlipSample& f : it->second) {

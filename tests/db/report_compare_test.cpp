@@ -12,6 +12,8 @@
 // none comes near 3.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "db/report.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_run.hpp"
@@ -44,6 +46,23 @@ TEST(ReportCompare, SameDistributionIsNotFlagged) {
   }
   EXPECT_FALSE(report.regressed());
   EXPECT_LT(max_z, 3.0);
+}
+
+// The regression threshold is k raised by Bonferroni over the counted
+// figures: m * P(|z| > regression_k) = P(|z| > k), two-sided normal.
+TEST(ReportCompare, RegressionThresholdIsBonferroniCorrected) {
+  db_test::ScratchDir dir;
+  rig_test::write_synthetic_run(dir.file("a.db"), base_spec(31));
+  rig_test::write_synthetic_run(dir.file("b.db"), base_spec(32));
+  const db::Report report(dir.file("a.db"), db::ReportOptions{},
+                          db::RunReference::parse(dir.file("b.db")));
+  std::size_t m = 0;
+  for (const db::ComparedFigure& f : report.comparison())
+    m += f.counted ? 1 : 0;
+  ASSERT_GT(m, 10u);
+  const double k = report.comparison().front().regression_k;
+  EXPECT_GT(k, 3.0);
+  EXPECT_NEAR(m * std::erfc(k / std::sqrt(2.0)) / std::erfc(3.0 / std::sqrt(2.0)), 1.0, 1e-9);
 }
 
 TEST(ReportCompare, ASolverThatGotWorseIsFlaggedAndOnlyIt) {

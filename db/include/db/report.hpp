@@ -2,7 +2,8 @@
 // solver is from the truth, at which distance, and whether this run is better
 // or worse than a baseline. From one run of a run database it computes
 //  - the paper's study (Maidi et al. 2010, §3), per solver and per scope
-//    ("0": the pose marker alone; "target": every detected marker):
+//    (the pose marker alone, scope "<its id>", "0" by default; "target":
+//    every detected marker):
 //    reconstruction (reprojection) error (Table 2, Fig. 8), generalization
 //    error (Table 3, Fig. 9), the regression estimated = a * true + b with
 //    asymptotic standard errors (Table 4), residual RMS and variance
@@ -174,9 +175,18 @@ struct ComparedFigure {
   std::string figure;  // "mean |distance error| (m)", ...
   double candidate = 0, baseline = 0;
   stats::Difference difference;
-  // True when a significant change is for the worse and counts as a
-  // regression (errors and failure rates up; times are reported but do not
-  // count: they depend on the machine).
+  // Whether the figure is one where larger is worse and counts towards a
+  // regression: errors and failure rates (times depend on the machine, the
+  // line parameters have no "worse" side: they are flagged, not counted).
+  bool counted = false;
+  // The threshold of the regression verdict: k raised by Bonferroni's
+  // correction over the m counted figures of the comparison, so that the
+  // chance that a run from the baseline's distributions is called
+  // "regressed" is at most that of one comparison at k (0.27 % at k = 3):
+  // two-sided P(|z| > regression_k) = P(|z| > k) / m.
+  double regression_k = 0;
+  // A counted figure significantly larger than the baseline's by
+  // regression_k / smaller by it.
   bool worse = false;
   bool better = false;
 };
@@ -216,7 +226,10 @@ RunStudy study_run(const std::string& database, const ReportOptions& options);
 // Every figure of `candidate` against `baseline`, for the solvers and scopes
 // both have: mean |distance error|, mean reprojection and generalization error
 // (per-position means, Welch), failure rate (pooled two-proportion standard
-// error), OLS slope and intercept, mean time per pose.
+// error), OLS slope and intercept, mean time per pose, and per distance
+// class the bias (mean over positions of their mean error; shown, not
+// counted). difference.significant uses k; worse and better the
+// family-wise regression_k.
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
                                          double k);
 
@@ -229,6 +242,7 @@ struct PaperValues {
   double slope, slope_se, intercept_m, intercept_se_m;                           // Table 4
   double residual_rms_m, residual_variance;                                      // Table 5
   double mean_error_m, error_variance, error_sd_m, time_us;                      // Table 6
+  double time_per_pose_us;  // DESIGN.md "Paper facts": per pose, Pentium III 1.1 GHz
 };
 std::optional<PaperValues> paper_values(const std::string& solver);
 
