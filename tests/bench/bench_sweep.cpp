@@ -1,0 +1,372 @@
+// Sweep benchmarks (issue 6 §8): what one bench position costs the
+// controller once the bench has settled and the frames are in hand, i.e.
+// everything of rig::Controller's measure_position and append_position except
+// motion, settling and exposure (rig/src/controller.cpp):
+//   per frame  rig::FrameMeasurer::measure (detector + every solver of the
+//              registry on the pose marker's scope and on the target's scope)
+//              and rig::to_frame_record;
+//   per position  rig::ground_truth_at (true pose, viewing angle, visible
+//              markers, Cramér-Rao bounds) and, for the *Store benchmarks,
+//              db::Store::append_position into a SQLite file in /tmp with
+//              record_store_time on, as a sweep opens it.
+//
+// Frames: the simulated rig as `rig sim --config config/sim.toml` renders it
+// (paper camera, config/targets/paper.toml, config/rigs/sim.toml), at bench
+// positions x = 0, 100, ..., 500 mm, y = 150 mm (1.00 m down to 0.50 m, where
+// all four markers are in view: checked), rendered once before timing. The
+// frames of a position are cycled, so a run of many positions repeats them.
+//
+// Benchmarks (positions per second = items_per_second; target of §8: >= 100
+// with 4 markers and every solver):
+//   BM_PositionCompute/frames:F           measure + to_frame_record for F frames,
+//                                          ground truth once
+//   BM_PositionComputeAndStore/frames:F/durable:D
+//                                          the same + append_position;
+//                                          durable = StoreOptions::durable_commits
+//                                          (config/sweeps/ci.toml: true)
+//   Counters per position (ms): detect_ms, solve_ms (every solver, both scopes,
+//   all frames), truth_ms, record_ms (to_frame_record), store_ms
+//   (append_position, commit included); markers_per_frame (detected).
+//   BM_EstimateInsertRate/durable:D       append_position of a real 3-frame
+//                                          position (4 detections, 10 solvers x
+//                                          2 scopes per frame = 60 estimate
+//                                          rows), estimate_rows_per_s (target:
+//                                          >= 100,000 per second)
+//   BM_ResidentMemory10k                   10,000 positions of compute + store
+//                                          (1 frame each to keep it near a
+//                                          minute, durable commits), VmRSS
+//                                          sampled after positions 100, 200,
+//                                          500, 1000, 2000, ..., 10000:
+//                                          rss_mb_at_N, rss_growth_mb (10000
+//                                          minus 100; target: flat) and
+//                                          rss_growth_mb_from_1000.
+// Run: scripts/bench bench_sweep, or
+//   build/tests/bench/bench_sweep --benchmark_filter='Position|Insert'
+//   build/tests/bench/bench_sweep --benchmark_filter=ResidentMemory
+#include <benchmark/benchmark.h>
+#include <stdlib.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "db/store.hpp"
+#include "rig/controller.hpp"
+#include "rig/frame_measurement.hpp"
+#include "rig/ground_truth.hpp"
+#include "sim/scene_renderer.hpp"
+#include "vision/camera.hpp"
+#include "vision/codebook.hpp"
+#include "vision/rig_geometry.hpp"
+#include "vision/target.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kMaxFramesPerPosition = 3;  // config/sweeps/ci.toml
+constexpr double kBenchY_mm = 150.0;      // config/rigs/sim.toml: the camera faces the pose marker
+const double kBenchX_mm[] = {0.0, 100.0, 200.0, 300.0, 400.0, 500.0};
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+struct BenchPosition {
+  double x_mm = 0, y_mm = 0;
+  std::vector<cv::Mat> frames;  // kMaxFramesPerPosition images
+};
+
+struct SimulatedRig {
+  vision::Camera camera = vision::Camera::paper_default();
+  vision::Target target =
+      vision::Target::load(std::string(RIG_SOURCE_DIR) + "/config/targets/paper.toml");
+  vision::RigGeometry geometry =
+      vision::RigGeometry::load(std::string(RIG_SOURCE_DIR) + "/config/rigs/sim.toml");
+  std::vector<BenchPosition> positions;
+};
+
+// Renders the frames of every bench position once. Throws std::runtime_error
+// if the geometry does not put all four markers in view at one of them (the
+// benchmark is specified with 4 markers).
+const SimulatedRig& simulated_rig() {
+  static const SimulatedRig* rig = [] {
+    auto* r = new SimulatedRig;
+    const sim::SceneRenderer renderer(r->camera, r->target, vision::Codebook());
+    std::uint64_t seed = 1;  // config/sim.toml: frame k's noise from seed + k
+    for (double x : kBenchX_mm) {
+      const rig::GroundTruth truth =
+          rig::ground_truth_at(r->geometry, r->camera, r->target, x, kBenchY_mm);
+      if (truth.visible_markers.size() != r->target.markers.size())
+        throw std::runtime_error(
+            "bench position x = " + std::to_string(x) + " mm, y = " + std::to_string(kBenchY_mm) +
+            " mm shows " + std::to_string(truth.visible_markers.size()) +
+            " markers; expected all " + std::to_string(r->target.markers.size()));
+      BenchPosition p{x, kBenchY_mm, {}};
+      const vision::Pose pose = r->geometry.T_cam_target(x, kBenchY_mm);
+      for (int k = 0; k < kMaxFramesPerPosition; ++k)
+        p.frames.push_back(renderer.render(pose, seed++).image);
+      r->positions.push_back(std::move(p));
+    }
+    return r;
+  }();
+  return *rig;
+}
+
+// Median of per-position wall times, seconds: less sensitive than the mean to
+// the other processes of a shared machine.
+double median(std::vector<double> seconds) {
+  if (seconds.empty()) return 0;
+  std::nth_element(seconds.begin(), seconds.begin() + seconds.size() / 2, seconds.end());
+  return seconds[seconds.size() / 2];
+}
+
+// Seconds spent per stage, summed over the positions measured.
+struct StageSums {
+  double detect = 0, solve = 0, truth = 0, record = 0, store = 0;
+  std::int64_t frames = 0, detections = 0;
+  std::vector<double> position_s;  // wall time of each whole position
+};
+
+// What Controller::measure_position builds once the frames are in hand.
+db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const SimulatedRig& rig,
+                                    std::int64_t plan_index, int frames_per_position,
+                                    StageSums& sums) {
+  const BenchPosition& p =
+      rig.positions[static_cast<std::size_t>(plan_index) % rig.positions.size()];
+  db::PositionRecord rec;
+  rec.plan_index = plan_index;
+  rec.commanded_x_mm = p.x_mm;
+  rec.commanded_y_mm = p.y_mm;
+  rec.measured_x_mm = p.x_mm;
+  rec.measured_y_mm = p.y_mm;
+  rec.stage_times = {{"move", 0}, {"settle", 0}, {"capture", 0}};
+
+  const auto truth_start = Clock::now();
+  const rig::GroundTruth truth =
+      rig::ground_truth_at(rig.geometry, rig.camera, rig.target, p.x_mm, p.y_mm);
+  rec.true_distance_m = truth.distance_m;
+  rec.true_viewing_angle_deg = truth.viewing_angle_deg;
+  rec.visible_markers = truth.visible_markers;
+  rec.distance_bounds = truth.distance_bounds;
+  sums.truth += seconds_since(truth_start);
+
+  double detect_s = 0;
+  std::map<std::string, double> solve_s;
+  for (int k = 0; k < frames_per_position; ++k) {
+    const rig::FrameMeasurement m = measurer.measure(p.frames[static_cast<std::size_t>(k)]);
+    detect_s += m.detect_s;
+    for (const auto& [name, s] : m.solve_s) {
+      solve_s[name] += s;
+      sums.solve += s;
+    }
+    sums.detections += static_cast<std::int64_t>(m.detections.size());
+    const auto record_start = Clock::now();
+    db::FrameRecord f = rig::to_frame_record(m, k);
+    f.host_timestamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
+                              std::chrono::system_clock::now().time_since_epoch())
+                              .count();
+    f.source = "gige:Aravis-Fake-RIGSIM01";
+    rec.frames.push_back(std::move(f));
+    sums.record += seconds_since(record_start);
+  }
+  sums.detect += detect_s;
+  sums.frames += frames_per_position;
+  rec.stage_times.push_back({"detect", detect_s});
+  for (const auto& name : measurer.solver_names())
+    rec.stage_times.push_back({"solve:" + name, solve_s[name]});
+  rec.status = db::PositionStatus::kOk;
+  return rec;
+}
+
+class ScratchDir {
+ public:
+  ScratchDir() {
+    std::string pattern = "/tmp/rig-bench-sweep-XXXXXX";
+    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed in /tmp");
+    path_ = pattern;
+  }
+  ~ScratchDir() { std::filesystem::remove_all(path_); }
+  ScratchDir(const ScratchDir&) = delete;
+  ScratchDir& operator=(const ScratchDir&) = delete;
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A store opened as `rig sweep` opens it, with one running run.
+struct SweepStore {
+  ScratchDir dir;
+  db::Store store;
+  std::int64_t run_id;
+
+  explicit SweepStore(bool durable_commits)
+      : store(dir.file("run.db"), options(durable_commits)),
+        run_id(store.start_run(description())) {}
+
+  static db::StoreOptions options(bool durable_commits) {
+    db::StoreOptions o;
+    o.durable_commits = durable_commits;
+    o.record_store_time = true;
+    return o;
+  }
+  static db::RunDescription description() {
+    db::RunDescription d;
+    d.config_json = R"({"frames_per_position":3})";
+    d.plan_json = R"({"kind":"grid"})";
+    d.plan_size = 1'000'000'000;
+    d.library_versions_json = "{}";
+    return d;
+  }
+};
+
+// Stage counters per position (ms) and the positions-per-second rates, for
+// `positions` positions measured in the benchmark's time.
+void report_stages(benchmark::State& state, const StageSums& sums, std::int64_t positions) {
+  const double n = static_cast<double>(positions);
+  state.counters["detect_ms"] = 1e3 * sums.detect / n;
+  state.counters["solve_ms"] = 1e3 * sums.solve / n;
+  state.counters["truth_ms"] = 1e3 * sums.truth / n;
+  state.counters["record_ms"] = 1e3 * sums.record / n;
+  if (sums.store > 0) state.counters["store_ms"] = 1e3 * sums.store / n;
+  state.counters["markers_per_frame"] =
+      sums.frames ? static_cast<double>(sums.detections) / static_cast<double>(sums.frames) : 0;
+  if (!sums.position_s.empty())
+    state.counters["positions_per_s_median"] = 1 / median(sums.position_s);
+  state.SetItemsProcessed(positions);  // positions per second, mean
+}
+
+void BM_PositionCompute(benchmark::State& state) {
+  const int frames = static_cast<int>(state.range(0));
+  const SimulatedRig& rig = simulated_rig();
+  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  StageSums sums;
+  std::int64_t index = 0;
+  for (auto _ : state) {
+    const auto start = Clock::now();
+    db::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
+    benchmark::DoNotOptimize(rec);
+    sums.position_s.push_back(seconds_since(start));
+  }
+  report_stages(state, sums, state.iterations());
+}
+BENCHMARK(BM_PositionCompute)
+    ->ArgName("frames")
+    ->Arg(1)
+    ->Arg(kMaxFramesPerPosition)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_PositionComputeAndStore(benchmark::State& state) {
+  const int frames = static_cast<int>(state.range(0));
+  const SimulatedRig& rig = simulated_rig();
+  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  SweepStore db(state.range(1) != 0);
+  StageSums sums;
+  std::int64_t index = 0;
+  for (auto _ : state) {
+    const auto start = Clock::now();
+    const db::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
+    const auto store_start = Clock::now();
+    db.store.append_position(db.run_id, rec);
+    sums.store += seconds_since(store_start);
+    sums.position_s.push_back(seconds_since(start));
+  }
+  report_stages(state, sums, state.iterations());
+}
+BENCHMARK(BM_PositionComputeAndStore)
+    ->ArgNames({"frames", "durable"})
+    ->Args({1, 1})
+    ->Args({kMaxFramesPerPosition, 1})
+    ->Args({1, 0})
+    ->Args({kMaxFramesPerPosition, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_EstimateInsertRate(benchmark::State& state) {
+  const SimulatedRig& rig = simulated_rig();
+  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  StageSums unused;
+  // A real position as the controller stores it, appended under new plan indices.
+  db::PositionRecord rec = measure_position(measurer, rig, 0, kMaxFramesPerPosition, unused);
+  std::int64_t estimate_rows = 0, detection_rows = 0;
+  for (const auto& f : rec.frames) {
+    estimate_rows += static_cast<std::int64_t>(f.estimates.size());
+    detection_rows += static_cast<std::int64_t>(f.detections.size());
+  }
+  SweepStore db(state.range(0) != 0);
+  std::vector<double> append_s;
+  for (auto _ : state) {
+    const auto start = Clock::now();
+    db.store.append_position(db.run_id, rec);
+    append_s.push_back(seconds_since(start));
+    ++rec.plan_index;
+  }
+  state.counters["estimate_rows_per_s_median"] =
+      static_cast<double>(estimate_rows) / median(append_s);
+  state.counters["estimate_rows_per_position"] = static_cast<double>(estimate_rows);
+  state.counters["detection_rows_per_position"] = static_cast<double>(detection_rows);
+  state.counters["estimate_rows_per_s"] = benchmark::Counter(
+      static_cast<double>(estimate_rows * state.iterations()), benchmark::Counter::kIsRate);
+  state.SetItemsProcessed(state.iterations());  // positions per second
+}
+BENCHMARK(BM_EstimateInsertRate)
+    ->ArgName("durable")
+    ->Arg(1)
+    ->Arg(0)
+    ->Unit(benchmark::kMicrosecond)
+    ->UseRealTime();
+
+// VmRSS of this process from /proc/self/status, MiB (Linux).
+double resident_mib() {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line))
+    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;  // kB
+  throw std::runtime_error("no VmRSS line in /proc/self/status");
+}
+
+double resident_at(const std::vector<std::pair<std::int64_t, double>>& samples,
+                   std::int64_t positions) {
+  for (const auto& [done, mib] : samples)
+    if (done == positions) return mib;
+  throw std::logic_error("no resident memory sample after " + std::to_string(positions));
+}
+
+void BM_ResidentMemory10k(benchmark::State& state) {
+  constexpr std::int64_t kPositions = 10'000;
+  const SimulatedRig& rig = simulated_rig();
+  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  SweepStore db(/*durable_commits=*/true);
+  StageSums sums;
+  std::vector<std::pair<std::int64_t, double>> samples;
+  for (auto _ : state) {
+    for (std::int64_t index = 0; index < kPositions; ++index) {
+      const db::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
+      const auto store_start = Clock::now();
+      db.store.append_position(db.run_id, rec);
+      sums.store += seconds_since(store_start);
+      const std::int64_t done = index + 1;
+      if (done == 100 || done == 200 || done == 500 || done % 1000 == 0)
+        samples.emplace_back(done, resident_mib());
+    }
+  }
+  for (const auto& [done, mib] : samples)
+    state.counters["rss_mb_at_" + std::to_string(done)] = mib;
+  state.counters["rss_growth_mb"] = samples.back().second - samples.front().second;
+  state.counters["rss_growth_mb_from_1000"] = samples.back().second - resident_at(samples, 1000);
+  report_stages(state, sums, kPositions * state.iterations());
+}
+BENCHMARK(BM_ResidentMemory10k)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();
