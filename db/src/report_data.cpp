@@ -189,10 +189,20 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
       s.distance_m = select.get_double(13);
       s.reprojection_px = select.get_double(14);
       if (!select.is_null(15)) s.generalization_px = select.get_double(15);
-      const bool converged = select.get_int(16) != 0;
       s.time_us = select.get_double(18);
       if (!select.is_null(19)) s.ambiguity_ratio = select.get_double(19);
-      if (converged) {
+      // A converged estimate must have a finite distance and reprojection
+      // error; one that does not is a solver bug, counted as a failure under
+      // its own name rather than poisoning every mean of the report.
+      const bool finite = std::isfinite(s.distance_m) && std::isfinite(s.reprojection_px);
+      const bool converged = select.get_int(16) != 0 && finite;
+      if (!std::isfinite(s.generalization_px)) s.generalization_px = kNaN;
+      if (!std::isfinite(s.time_us)) s.time_us = kNaN;
+      if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
+      if (select.get_int(16) != 0 && !finite) {
+        s.status = SampleStatus::kFailed;
+        ++target.failures_by_termination["converged with a non-finite value"];
+      } else if (converged) {
         s.status = SampleStatus::kConverged;
         const int which = scope == "target" ? 1 : 0;
         {

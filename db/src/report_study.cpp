@@ -149,7 +149,7 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
       ++s.skipped;
       continue;
     }
-    time.add(e.time_us);
+    if (!std::isnan(e.time_us)) time.add(e.time_us);
     const auto [distance_class, angle_class] = classes_of(e.position);
     if (!std::isnan(e.ambiguity_ratio)) {
       const bool ambiguous = e.ambiguity_ratio >= options.ambiguity_ratio_threshold;
@@ -268,8 +268,9 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
 std::vector<StageStudy> study_stages(const RunData& data) {
   std::map<std::string, std::vector<double>> by_stage;
   for (const PositionData& p : data.positions) {
-    for (const StageTime& t : p.record.stage_times)
-      by_stage[t.stage].push_back(t.seconds);
+    for (const StageTime& t : p.record.stage_times) {
+      if (std::isfinite(t.seconds)) by_stage[t.stage].push_back(t.seconds);
+    }
   }
   std::vector<StageStudy> out;
   for (auto& [stage, seconds] : by_stage) {

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <sqlite3.h>
 
+#include <cmath>
 #include <fstream>
 #include <iostream>
 
@@ -150,6 +151,35 @@ TEST(ReportQueries, UseTheIndexesAndScanNoTable) {
     std::cout << details;
   }
   sqlite3_close(db);
+}
+
+}  // namespace
+
+namespace {
+
+// A converged estimate with an infinite value (a solver bug) is counted as a
+// failure under its own name; the report's other figures stay finite.
+TEST(ReportInput, ANonFiniteConvergedEstimateIsAFailureNotAPoisonedMean) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("inf.db");
+  std::int64_t run = 0;
+  {
+    db::Store store(path);
+    run = store.start_run(db_test::make_run_description(4));
+    for (int i = 0; i < 4; ++i) {
+      db::PositionRecord p = db_test::make_position(i, 2, 4, 2);
+      if (i == 1) p.frames[0].estimates[0].reprojection_error_px = INFINITY;  // solver_0, "0"
+      store.append_position(run, p);
+    }
+    store.finish_run(run, db::RunStatus::kCompleted, "");
+  }
+  const db::RunStudy st = db::study_run(path, {});
+  const db::SolverStudy* s = st.find("solver_0", "0");
+  ASSERT_NE(s, nullptr);
+  EXPECT_EQ(s->failed, 1u);
+  EXPECT_EQ(s->failures_by_termination.at("converged with a non-finite value"), 1u);
+  EXPECT_EQ(s->used, 7u);
+  EXPECT_TRUE(std::isfinite(s->reprojection_px.mean));
 }
 
 }  // namespace
