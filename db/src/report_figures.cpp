@@ -166,85 +166,124 @@ void add_paper_figures(const ReportInput& in, const std::string& scope, Section&
       "the detected corners in the class."));
 }
 
+namespace {
+
+// Rate of ambiguous estimates (ambiguity) or flips (!ambiguity) of a solver
+// and scope, per distance or viewing-angle class.
+svg::Series rate_series(const SolverStudy& s, bool ambiguity, bool by_angle,
+                        const std::string& label, const std::string& colour, bool dashed) {
+  svg::Series out{label, {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, dashed, colour};
+  auto add = [&](double x, std::size_t ac, std::size_t a, std::size_t fc, std::size_t fl) {
+    out.x.push_back(x);
+    out.y.push_back(ambiguity ? fraction(a, ac) : fraction(fl, fc));
+  };
+  if (by_angle) {
+    for (const AngleClassStudy& c : s.by_viewing_angle)
+      add(0.5 * (c.lower_deg + c.upper_deg), c.ambiguity_checked, c.ambiguous, c.flip_checked,
+          c.flips);
+  } else {
+    for (const DistanceClassStudy& c : s.classes)
+      add(centre(c), c.ambiguity_checked, c.ambiguous, c.flip_checked, c.flips);
+  }
+  return out;
+}
+
+void add_rate_figures(const ReportInput& in, Section& sec) {
+  const RunStudy& st = in.study;
+  for (const bool ambiguity : {true, false}) {
+    for (const bool by_angle : {false, true}) {
+      if (by_angle && !st.viewing_angles_recorded) continue;
+      svg::Figure f;
+      f.id = std::string(ambiguity ? "ambiguity-" : "flips-") + (by_angle ? "angle" : "distance");
+      f.title = std::string(ambiguity ? "Planar ambiguity" : "Flips") + " against " +
+                (by_angle ? "viewing angle" : "distance");
+      f.x = by_angle ? svg::Axis{"viewing angle at the true pose", "deg", false, 0.0, 90.0}
+                     : svg::Axis{"true distance", "m", false, 0.10, 1.00};
+      f.y = {ambiguity ? "ambiguous / estimates with a ratio" : "flips / frames with both scopes",
+             "", false, 0.0, std::nullopt};
+      f.caption =
+          ambiguity
+              ? "Estimates whose ambiguity_ratio (better over worse planar solution's error) is "
+                "at least " +
+                    num(st.options.ambiguity_ratio_threshold, 3) + "."
+              : "Frames whose pose-marker rotation differs from the whole-target rotation of the "
+                "same solver by more than " +
+                    num(st.options.flip_angle_deg, 3) + " degrees.";
+      f.caption += " Solvers with none are in the ambiguity table only; dashed: the baseline.";
+      f.width_px = 760;
+      f.height_px = 420;
+      for (const SolverStudy& s : st.solvers) {
+        const std::size_t events = ambiguity ? s.ambiguous : s.flips;
+        const SolverStudy* b = in.baseline ? in.baseline->find(s.solver, s.scope) : nullptr;
+        const std::size_t baseline_events = b == nullptr ? 0 : ambiguity ? b->ambiguous : b->flips;
+        if (events == 0 && baseline_events == 0) continue;
+        const std::string colour = colour_of(solver_index(st, s.solver));
+        const std::string label = s.solver + (ambiguity ? " (" + s.scope + ")" : "");
+        f.series.push_back(rate_series(s, ambiguity, by_angle, label, colour, false));
+        if (b != nullptr)
+          f.series.push_back(
+              rate_series(*b, ambiguity, by_angle, label + " (baseline)", colour, true));
+      }
+      sec.figure(std::move(f));
+    }
+  }
+}
+
+// Detection rate, edge-fit residual and corner jitter per marker-size class.
+void size_series(const RunStudy& st, const std::string& suffix, bool dashed, svg::Series& rate,
+                 svg::Series& edge, svg::Series& jitter) {
+  rate = {"detection rate" + suffix,         {},     {},          {},
+          svg::SeriesStyle::kLineAndMarkers, dashed, colour_of(0)};
+  edge = {"edge-fit residual" + suffix,      {},     {},          {},
+          svg::SeriesStyle::kLineAndMarkers, dashed, colour_of(1)};
+  jitter = {"corner jitter" + suffix,          {},     {},          {},
+            svg::SeriesStyle::kLineAndMarkers, dashed, colour_of(2)};
+  for (const MarkerSizeClass& m : st.marker_sizes) {
+    const double x = 0.5 * (m.lower_px + m.upper_px);
+    rate.x.push_back(x);
+    rate.y.push_back(fraction(m.detected, m.expected));
+    edge.x.push_back(x);
+    edge.y.push_back(m.edge_fit_residual_px.mean);
+    jitter.x.push_back(x);
+    jitter.y.push_back(m.corner_jitter_px);
+  }
+}
+
+}  // namespace
+
 void add_beyond_figures(const ReportInput& in, Section& sec) {
   const RunStudy& st = in.study;
-  // Ambiguity and flips against distance and viewing angle.
-  for (const bool by_angle : {false, true}) {
-    if (by_angle && !st.viewing_angles_recorded) continue;
-    svg::Figure f;
-    f.id = by_angle ? "ambiguity-angle" : "ambiguity-distance";
-    f.title = std::string("Planar ambiguity and flips against ") +
-              (by_angle ? "viewing angle" : "distance");
-    f.x = by_angle ? svg::Axis{"viewing angle at the true pose", "deg", false, 0.0, 90.0}
-                   : svg::Axis{"true distance", "m", false, 0.10, 1.00};
-    f.y = {"fraction of estimates", "", false, 0.0, std::nullopt};
-    f.caption =
-        "Solid: ambiguous estimates (ambiguity_ratio >= " +
-        num(st.options.ambiguity_ratio_threshold, 3) +
-        "); dashed: flips (pose-marker rotation more than " + num(st.options.flip_angle_deg, 3) +
-        " degrees from the whole-target rotation of the same solver and frame). Solvers with "
-        "none are listed in the ambiguity table only.";
-    f.width_px = 760;
-    f.height_px = 440;
-    for (const SolverStudy& s : st.solvers) {
-      const std::string colour = colour_of(solver_index(st, s.solver));
-      svg::Series amb{s.solver + " " + s.scope + " ambiguous", {},    {},    {},
-                      svg::SeriesStyle::kLineAndMarkers,       false, colour};
-      svg::Series flip{
-          s.solver + " flips", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, true, colour};
-      auto add = [&](double x, std::size_t ac, std::size_t a, std::size_t fc, std::size_t fl) {
-        amb.x.push_back(x);
-        amb.y.push_back(fraction(a, ac));
-        flip.x.push_back(x);
-        flip.y.push_back(fraction(fl, fc));
-      };
-      if (by_angle) {
-        for (const AngleClassStudy& c : s.by_viewing_angle)
-          add(0.5 * (c.lower_deg + c.upper_deg), c.ambiguity_checked, c.ambiguous, c.flip_checked,
-              c.flips);
-      } else {
-        for (const DistanceClassStudy& c : s.classes)
-          add(centre(c), c.ambiguity_checked, c.ambiguous, c.flip_checked, c.flips);
-      }
-      // Solvers without any ambiguous estimate or flip are in the table only.
-      if (s.ambiguous > 0) f.series.push_back(amb);
-      if (s.flips > 0) f.series.push_back(flip);
-    }
-    sec.figure(std::move(f));
+  add_rate_figures(in, sec);
+  if (st.marker_sizes.empty()) return;
+  svg::Figure rate;
+  rate.id = "detection-rate";
+  rate.title = "Detection rate against marker size";
+  rate.x = {"projected marker side at the true pose", "px", false, std::nullopt, std::nullopt};
+  rate.y = {"detected / visible", "", false, 0.0, 1.05};
+  rate.caption =
+      "Fraction of (visible marker, frame) pairs in which the marker was detected; dashed: the "
+      "baseline.";
+  svg::Figure quality;
+  quality.id = "corner-quality";
+  quality.title = "Corner quality against marker size";
+  quality.x = rate.x;
+  quality.y = {"edge-fit residual, corner jitter", "px", true, std::nullopt, std::nullopt};
+  quality.caption =
+      "Edge-fit residual (RMS of edge samples about the fitted sides, mean over markers and "
+      "positions) and corner jitter (pooled frame-to-frame sd of the corners), per marker-size "
+      "class; dashed: the baseline.";
+  svg::Series r, edge, jitter;
+  size_series(st, "", false, r, edge, jitter);
+  rate.series.push_back(r);
+  quality.series = {edge, jitter};
+  if (in.baseline && !in.baseline->marker_sizes.empty()) {
+    size_series(*in.baseline, " (baseline)", true, r, edge, jitter);
+    if (in.baseline->visible_markers_recorded) rate.series.push_back(r);
+    quality.series.push_back(edge);
+    quality.series.push_back(jitter);
   }
-  // Detection against marker size.
-  if (!st.marker_sizes.empty()) {
-    svg::Figure rate;
-    rate.id = "detection-rate";
-    rate.title = "Detection rate against marker size";
-    rate.x = {"projected marker side at the true pose", "px", false, std::nullopt, std::nullopt};
-    rate.y = {"detected / visible", "", false, 0.0, 1.05};
-    rate.caption = "Fraction of (visible marker, frame) pairs in which the marker was detected.";
-    svg::Figure quality;
-    quality.id = "corner-quality";
-    quality.title = "Corner quality against marker size";
-    quality.x = rate.x;
-    quality.y = {"px", "px", true, std::nullopt, std::nullopt};
-    quality.caption =
-        "Edge-fit residual (RMS of edge samples about the fitted sides) and corner jitter "
-        "(pooled frame-to-frame sd of the corners), per marker-size class.";
-    svg::Series r{"detection rate", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, false, ""};
-    svg::Series edge{"edge-fit residual", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, false, ""};
-    svg::Series jitter{"corner jitter", {}, {}, {}, svg::SeriesStyle::kLineAndMarkers, true, ""};
-    for (const MarkerSizeClass& m : st.marker_sizes) {
-      const double x = 0.5 * (m.lower_px + m.upper_px);
-      r.x.push_back(x);
-      r.y.push_back(fraction(m.detected, m.expected));
-      edge.x.push_back(x);
-      edge.y.push_back(m.edge_fit_residual_px.mean);
-      jitter.x.push_back(x);
-      jitter.y.push_back(m.corner_jitter_px);
-    }
-    rate.series.push_back(r);
-    quality.series = {edge, jitter};
-    if (st.visible_markers_recorded) sec.figure(std::move(rate));
-    sec.figure(std::move(quality));
-  }
+  if (st.visible_markers_recorded) sec.figure(std::move(rate));
+  sec.figure(std::move(quality));
 }
 
 }  // namespace db::report

@@ -50,6 +50,16 @@ void solver_rows(const ReportInput& in, const std::string& scope, html::Table& t
   }
 }
 
+// This run's study of a solver and scope, then the baseline's if it has one.
+std::vector<std::pair<const SolverStudy*, std::string>> with_baseline(const ReportInput& in,
+                                                                      const SolverStudy& s) {
+  std::vector<std::pair<const SolverStudy*, std::string>> out{{&s, "this run"}};
+  if (in.baseline) {
+    if (const SolverStudy* b = in.baseline->find(s.solver, s.scope)) out.push_back({b, "baseline"});
+  }
+  return out;
+}
+
 std::string tid(const std::string& name, const std::string& scope) {
   return name + "-" + scope;
 }
@@ -194,19 +204,22 @@ void add_paper_tables(const ReportInput& in, const std::string& scope, Section& 
 void add_beyond_tables(const ReportInput& in, Section& sec) {
   const RunStudy& st = in.study;
   {
-    html::Table t{
-        "convergence",
-        "Convergence failures per solver: applicable estimates that did not converge, "
-        "by termination reason; skipped = solver not applicable to the scope",
-        {"solver", "scope", "estimates", "skipped", "failed", "failure rate", "terminations"},
-        {}};
-    for (const SolverStudy& s : st.solvers) {
-      std::string reasons;
-      for (const auto& [why, n] : s.failures_by_termination)
-        reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
-      t.rows.push_back({text(s.solver), text(s.scope), count(s.estimates), count(s.skipped),
-                        count(s.failed), number(rate(s.failed, s.estimates - s.skipped)),
-                        text(reasons.empty() ? "-" : reasons)});
+    html::Table t{"convergence",
+                  "Convergence failures per solver: applicable estimates that did not converge, "
+                  "by termination reason; skipped = solver not applicable to the scope",
+                  {"solver", "scope", "run", "estimates", "skipped", "failed", "failure rate",
+                   "terminations"},
+                  {}};
+    for (const SolverStudy& c : st.solvers) {
+      for (const auto& [s, source] : with_baseline(in, c)) {
+        std::string reasons;
+        for (const auto& [why, n] : s->failures_by_termination)
+          reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
+        t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->estimates),
+                          count(s->skipped), count(s->failed),
+                          number(rate(s->failed, s->estimates - s->skipped)),
+                          text(reasons.empty() ? "-" : reasons)});
+      }
     }
     sec.table(std::move(t));
   }
@@ -218,15 +231,17 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
                       "frames whose pose-marker rotation differs from the whole-target rotation "
                       "of the same solver by more than " +
                       num(st.options.flip_angle_deg, 3) + " degrees",
-                  {"solver", "scope", "with ratio", "ambiguous", "rate", "frames compared", "flips",
-                   "flip rate"},
+                  {"solver", "scope", "run", "with ratio", "ambiguous", "rate", "frames compared",
+                   "flips", "flip rate"},
                   {}};
-    for (const SolverStudy& s : st.solvers) {
-      if (s.ambiguity_checked == 0 && s.flip_checked == 0) continue;
-      t.rows.push_back({text(s.solver), text(s.scope), count(s.ambiguity_checked),
-                        count(s.ambiguous), number(rate(s.ambiguous, s.ambiguity_checked)),
-                        count(s.flip_checked), count(s.flips),
-                        number(rate(s.flips, s.flip_checked))});
+    for (const SolverStudy& c : st.solvers) {
+      if (c.ambiguity_checked == 0 && c.flip_checked == 0) continue;
+      for (const auto& [s, source] : with_baseline(in, c)) {
+        t.rows.push_back({text(s->solver), text(s->scope), text(source),
+                          count(s->ambiguity_checked), count(s->ambiguous),
+                          number(rate(s->ambiguous, s->ambiguity_checked)), count(s->flip_checked),
+                          count(s->flips), number(rate(s->flips, s->flip_checked))});
+      }
     }
     sec.table(std::move(t));
   }
@@ -262,16 +277,21 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
     sec.table(std::move(t));
   }
   {
-    html::Table t{
-        "stages",
-        "Time per stage of a position, s",
-        {"stage", "n", "mean (s)", "sd (s)", "median (s)", "95th percentile (s)", "total (s)"},
-        {}};
-    for (const StageStudy& s : st.stages) {
-      t.rows.push_back({text(s.stage), count(s.seconds.count), number(s.seconds.mean),
-                        number(s.seconds.sd), number(s.median_s), number(s.p95_s),
-                        number(s.seconds.mean * static_cast<double>(s.seconds.count))});
-    }
+    html::Table t{"stages",
+                  "Time per stage of a position, s",
+                  {"stage", "run", "n", "mean (s)", "sd (s)", "median (s)", "95th percentile (s)",
+                   "total (s)"},
+                  {}};
+    auto rows = [&](const RunStudy& run, const std::string& source) {
+      for (const StageStudy& s : run.stages) {
+        t.rows.push_back({text(s.stage), text(source), count(s.seconds.count),
+                          number(s.seconds.mean), number(s.seconds.sd), number(s.median_s),
+                          number(s.p95_s),
+                          number(s.seconds.mean * static_cast<double>(s.seconds.count))});
+      }
+    };
+    rows(st, "this run");
+    if (in.baseline) rows(*in.baseline, "baseline");
     sec.table(std::move(t));
   }
   {
