@@ -73,6 +73,7 @@ Section overview(const ReportInput& in) {
   row("plan positions", std::to_string(s.run.description.plan_size));
   row("positions measured", std::to_string(s.positions));
   row("positions failed (no frames)", std::to_string(s.failed_positions));
+  row("positions outside the distance classes", std::to_string(s.positions_outside_classes));
   row("frames", std::to_string(s.frames));
   row("estimates", std::to_string(s.estimates));
   row("solver x scope combinations", std::to_string(s.solvers.size()));

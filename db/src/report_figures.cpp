@@ -163,7 +163,8 @@ void add_paper_figures(const ReportInput& in, const std::string& scope, Section&
       [](const DistanceClassStudy& c) { return c.efficiency; }, nullptr,
       "Frame-to-frame variance of the distance over sigma_corner² times the position's "
       "Cramér-Rao distance bound² (1 = efficient). sigma_corner: pooled frame-to-frame sd of "
-      "the detected corners in the class."));
+      "the detected corners in the class. Below 1 the corner noise is not the independent, "
+      "isotropic noise the bound assumes (e.g. correlated between corners)."));
 }
 
 namespace {

@@ -126,6 +126,7 @@ json to_json(const RunStudy& st) {
             {"host", st.run.description.host}}},
           {"positions", st.positions},
           {"failed_positions", st.failed_positions},
+          {"positions_outside_classes", st.positions_outside_classes},
           {"frames", st.frames},
           {"estimates", st.estimates},
           {"viewing_angles_recorded", st.viewing_angles_recorded},

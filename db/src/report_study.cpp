@@ -14,6 +14,12 @@ stats::EqualWidthBins distance_classes() {
   return stats::EqualWidthBins(0.10, 1.00, 10);
 }
 
+std::optional<std::size_t> distance_class(const stats::EqualWidthBins& bins, double d) {
+  if (d < bins.lower() && d >= bins.lower() - kClassEdgeToleranceM) return 0;
+  if (d > bins.upper() && d <= bins.upper() + kClassEdgeToleranceM) return bins.count() - 1;
+  return bins.index_of(d);
+}
+
 stats::EqualWidthBins viewing_angle_classes() {
   return stats::EqualWidthBins(0.0, 90.0, 9);
 }
@@ -72,7 +78,7 @@ std::vector<ClassCornerNoise> corner_noise_by_class(const RunData& data) {
   std::vector<Pooled> pooled(bins.count());
   for (const PositionData& p : data.positions) {
     if (!p.record.true_distance_m) continue;
-    const auto c = bins.index_of(*p.record.true_distance_m);
+    const auto c = distance_class(bins, *p.record.true_distance_m);
     if (!c) continue;
     for (const MarkerAtPosition& m : p.markers) {
       pooled[*c].sum_squares += m.corner_sum_squares;
@@ -136,7 +142,7 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
   auto classes_of = [&](std::uint32_t position) {
     const PositionRecord& p = data.positions[position].record;
     return std::make_pair(
-        p.true_distance_m ? bins.index_of(*p.true_distance_m) : std::nullopt,
+        p.true_distance_m ? distance_class(bins, *p.true_distance_m) : std::nullopt,
         p.true_viewing_angle_deg ? angles.index_of(*p.true_viewing_angle_deg) : std::nullopt);
   };
 
@@ -210,7 +216,7 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
       s.plot_true_m.push_back(*p.true_distance_m);
       s.plot_estimated_m.push_back(d.mean);
     }
-    const auto c = bins.index_of(*p.true_distance_m);
+    const auto c = distance_class(bins, *p.true_distance_m);
     if (!c) continue;
     ClassAccumulator& a = acc[*c];
     a.bias.add(d.mean - *p.true_distance_m);
@@ -358,6 +364,13 @@ RunStudy compute_study(const RunData& data, const ReportOptions& options) {
     study.visible_markers_recorded |= !p.record.visible_markers.empty();
     study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
     study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
+  }
+  const stats::EqualWidthBins bins = distance_classes();
+  for (const PositionData& p : data.positions) {
+    if (p.record.status == PositionStatus::kOk &&
+        (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
+      ++study.positions_outside_classes;
+    }
   }
   study.corner_noise = corner_noise_by_class(data);
   for (const SolverScopeData& rows : data.solvers) {

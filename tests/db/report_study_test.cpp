@@ -299,3 +299,36 @@ TEST(ReportStudyOptions, SaysWhatASchemaOneWriterDidNotRecord) {
 }
 
 }  // namespace
+
+namespace {
+
+// A plan's end points read back a few micrometres outside [0.10, 1.00] m
+// stay in the edge classes; positions well outside are counted apart.
+TEST(ReportStudyOptions, EdgePositionsJustOutsideTheRangeStayInTheEdgeClasses) {
+  db_test::ScratchDir dir;
+  SyntheticRunSpec spec;
+  spec.positions = 20;
+  spec.solvers = {rig_test::paper_like_solvers()[1]};
+  spec.min_distance_m = 0.10 - 0.004;  // within the 5 mm tolerance
+  spec.max_distance_m = 1.00 + 0.004;
+  rig_test::write_synthetic_run(dir.file("edge.db"), spec);
+  const db::RunStudy edge = db::study_run(dir.file("edge.db"), {});
+  EXPECT_EQ(edge.positions_outside_classes, 0u);
+  const db::SolverStudy* s = edge.find("hybrid_oi", "0");
+  ASSERT_NE(s, nullptr);
+  std::size_t in_classes = 0;
+  for (const auto& c : s->classes)
+    in_classes += c.error_m.count;
+  EXPECT_EQ(in_classes, s->used);
+
+  spec.max_distance_m = 1.20;  // positions beyond 1.005 m are outside
+  rig_test::write_synthetic_run(dir.file("far.db"), spec);
+  const db::RunStudy far = db::study_run(dir.file("far.db"), {});
+  std::size_t beyond = 0;
+  for (int i = 0; i < spec.positions; ++i)
+    beyond += rig_test::synthetic_true_distance(spec, i) > 1.005 ? 1 : 0;
+  EXPECT_GT(beyond, 0u);
+  EXPECT_EQ(far.positions_outside_classes, beyond);
+}
+
+}  // namespace

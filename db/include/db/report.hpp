@@ -195,6 +195,9 @@ struct RunStudy {
   std::string database;  // path as given
   Run run;
   std::size_t positions = 0, failed_positions = 0, frames = 0;
+  // Measured positions with no true distance or one outside the ten classes
+  // (more than 5 mm outside [0.10, 1.00] m): in the fits, not in the classes.
+  std::size_t positions_outside_classes = 0;
   std::size_t estimates = 0;
   std::vector<SolverStudy> solvers;  // sorted by solver, then scope ("0" before "target")
   std::vector<ClassCornerNoise> corner_noise;
