@@ -109,6 +109,38 @@ svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
   return f;
 }
 
+// Fig. 12's points less the fitted line: what the full-range plot cannot show.
+svg::Figure residual_figure(const ReportInput& in, const std::string& scope) {
+  svg::Figure f;
+  f.id = "fig12-residuals-" + scope;
+  f.title = "Residuals of the fit, scope " + scope;
+  f.x = {"true distance", "m", false, std::nullopt, std::nullopt};
+  f.y = {"position's mean estimate - (a * true + b)", "m", false, std::nullopt, std::nullopt};
+  f.caption =
+      "The points of the figure above less each solver's least-squares line: curvature or a "
+      "spread growing with distance shows here (dashed: the baseline's).";
+  f.width_px = 760;
+  f.height_px = 440;
+  auto series = [](const SolverStudy& s, const std::string& label, const std::string& colour,
+                   bool dashed) {
+    svg::Series out{label, s.plot_true_m, {}, {}, svg::SeriesStyle::kMarkers, dashed, colour};
+    for (std::size_t i = 0; i < s.plot_true_m.size(); ++i)
+      out.y.push_back(s.plot_estimated_m[i] - (s.ols->slope * s.plot_true_m[i] + s.ols->intercept));
+    return out;
+  };
+  for (const SolverStudy& s : in.study.solvers) {
+    if (s.scope != scope || !s.ols) continue;
+    const std::string colour = colour_of(solver_index(in.study, s.solver));
+    f.series.push_back(series(s, s.solver, colour, false));
+    if (in.baseline) {
+      const SolverStudy* b = in.baseline->find(s.solver, scope);
+      if (b != nullptr && b->ols)
+        f.series.push_back(series(*b, s.solver + " (baseline)", colour, true));
+    }
+  }
+  return f;
+}
+
 double fraction(std::size_t k, std::size_t n) {
   return n > 0 ? static_cast<double>(k) / static_cast<double>(n) : kNaN;
 }
@@ -144,6 +176,7 @@ void add_paper_figures(const ReportInput& in, const std::string& scope, Section&
       [](const DistanceClassStudy& c) { return c.error_m.variance; }, nullptr,
       "Variance of the distance error in the ten distance classes (paper Fig. 11), log scale."));
   sec.figure(fit_figure(in, scope));
+  sec.figure(residual_figure(in, scope));
   sec.figure(class_figure(
       in, scope, "jitter-" + scope, "Jitter per class" + where,
       {"jitter (sd over the frames of a position)", "m", true, std::nullopt, std::nullopt},
