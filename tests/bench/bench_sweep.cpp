@@ -39,11 +39,14 @@
 //                                          500, 1000, 2000, ..., 10000:
 //                                          rss_mb_at_N, rss_growth_mb (10000
 //                                          minus 100; target: flat) and
-//                                          rss_growth_mb_from_1000.
+//                                          rss_growth_mb_from_1000; SQLite's own
+//                                          heap (page cache included) at 100 and
+//                                          10000 (sqlite_heap_mb_at_N).
 // Run: scripts/bench bench_sweep, or
 //   build/tests/bench/bench_sweep --benchmark_filter='Position|Insert'
 //   build/tests/bench/bench_sweep --benchmark_filter=ResidentMemory
 #include <benchmark/benchmark.h>
+#include <sqlite3.h>
 #include <stdlib.h>
 
 #include <algorithm>
@@ -348,6 +351,7 @@ void BM_ResidentMemory10k(benchmark::State& state) {
   SweepStore db(/*durable_commits=*/true);
   StageSums sums;
   std::vector<std::pair<std::int64_t, double>> samples;
+  double sqlite_heap_at_100 = 0;  // SQLite's own allocations (page cache, statements), MiB
   for (auto _ : state) {
     for (std::int64_t index = 0; index < kPositions; ++index) {
       const db::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
@@ -357,12 +361,15 @@ void BM_ResidentMemory10k(benchmark::State& state) {
       const std::int64_t done = index + 1;
       if (done == 100 || done == 200 || done == 500 || done % 1000 == 0)
         samples.emplace_back(done, resident_mib());
+      if (done == 100) sqlite_heap_at_100 = static_cast<double>(sqlite3_memory_used()) / 1048576;
     }
   }
   for (const auto& [done, mib] : samples)
     state.counters["rss_mb_at_" + std::to_string(done)] = mib;
   state.counters["rss_growth_mb"] = samples.back().second - samples.front().second;
   state.counters["rss_growth_mb_from_1000"] = samples.back().second - resident_at(samples, 1000);
+  state.counters["sqlite_heap_mb_at_100"] = sqlite_heap_at_100;
+  state.counters["sqlite_heap_mb_at_10000"] = static_cast<double>(sqlite3_memory_used()) / 1048576;
   report_stages(state, sums, kPositions * state.iterations());
 }
 BENCHMARK(BM_ResidentMemory10k)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
