@@ -92,8 +92,10 @@ void add_report_command(CLI::App& app, ExitStatus& status) {
                   "Pose-marker vs whole-target rotation difference that counts as a flip, deg")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 180.0));
-  cmd->add_option("--true-distance-sd", args->options.true_distance_sd_m,
-                  "Uncertainty of the true distance for the Deming regression, m")
+  cmd->add_option(
+         "--true-distance-sd", args->options.true_distance_sd_m,
+         "Random error of the true distance (bench read-back repeatability) for the Deming "
+         "regression, m")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_option("--k", args->options.significance_k,

@@ -71,13 +71,16 @@ struct ReportOptions {
   // degrees at 1 m; 20 degrees separates the two. Lower: noise counted as
   // flips at long range; higher: flips near frontal views missed.
   double flip_angle_deg = 20.0;
-  // Standard deviation of the true distance itself (the bench read-back and
-  // rig geometry), metres: the x error of the Deming regression, whose error
-  // variance ratio is delta = (jitter of the estimates)^2 / this^2. 0.5 mm is
-  // a bench repeatability of tens of micrometres plus the uncertainty of the
-  // measured camera-target geometry. Smaller: Deming tends to ordinary least
-  // squares; larger: towards the inverse regression.
-  double true_distance_sd_m = 0.0005;
+  // Standard deviation of the true distance's random error from position to
+  // position (the bench read-back's repeatability), metres: the x error of
+  // the Deming regression, whose error variance ratio is delta = (jitter of
+  // the estimates)^2 / this^2. 50 um is the repeatability of a ball-screw
+  // bench with an encoder read-back; an error of the rig geometry is the same
+  // for every position (it moves the intercept, not the points) and does not
+  // belong here. Smaller: Deming tends to ordinary least squares; larger:
+  // towards the inverse regression. If it exceeds the residual sd of the fit,
+  // the data contradict it (the points would scatter at least that much).
+  double true_distance_sd_m = 0.00005;
   // Run comparison: a difference is flagged when |difference| > k * its
   // standard error (db::stats::compare_means). 3 flags a true non-change
   // 0.27 % of the time per figure.
