@@ -325,7 +325,8 @@ void add_comparison(const ReportInput& in, Section& sec) {
       "counted figures, so that a run drawn from the baseline's distributions is called "
       "regressed no more often than a single comparison would be. Errors are compared as "
       "per-position means (frames of one position share its pose and are not independent); "
-      "times, line parameters and class biases are flagged but never counted.");
+      "times, line parameters and class biases are flagged but never counted. Whole-run "
+      "means depend on the distances visited: compare runs of the same plan.");
   html::Table t{"comparison",
                 "Every compared figure: this run against the baseline",
                 {"solver", "scope", "figure", "this run", "baseline", "difference",
