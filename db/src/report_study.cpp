@@ -168,7 +168,11 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
       continue;
     }
     const PositionRecord& p = data.positions[e.position].record;
-    if (!p.true_distance_m) continue;
+    // An unknown (or impossible) true distance: the estimate converged but
+    // there is nothing to compare it with.
+    if (!p.true_distance_m || !std::isfinite(*p.true_distance_m) || *p.true_distance_m <= 0) {
+      continue;
+    }
     ++s.used;
     const double truth = *p.true_distance_m;
     const double err = e.distance_m - truth;
