@@ -1,6 +1,7 @@
 // rig sweep SWEEP.toml: the product's main job (issue 6). Drives the bench
 // through the sweep file's plan, measures every position with every solver
-// and logs it to the run database; --resume continues a run that stopped.
+// and logs it to the run database; --resume continues a run that stopped;
+// --replay measures the frames a run saved again, into a new run (rig/replay.hpp).
 //
 // Output: on a terminal a progress bar with ETA on stderr; otherwise one line
 // per position on stdout. At the end, a summary that says where the results
@@ -8,7 +9,8 @@
 //
 // Exit codes: 0 the run completed; 1 it was aborted or failed (the database
 // holds everything measured; the summary says how to resume); 2 bad input
-// (sweep file, calibration not matching the camera, unknown run).
+// (sweep file, calibration not matching the camera or the recorded frames,
+// unknown run, a replay of a run without saved frames).
 #include <unistd.h>
 
 #include <atomic>
@@ -29,6 +31,7 @@
 #include "motion/modbus_bench.hpp"
 #include "rig/controller.hpp"
 #include "rig/progress_view.hpp"
+#include "rig/replay.hpp"
 #include "rig/run_record.hpp"
 #include "rig/sweep_config.hpp"
 #include "rig/telemetry.hpp"
@@ -41,6 +44,7 @@ struct SweepArgs {
   std::string sweep_file;
   std::string database;
   std::int64_t resume_run = 0;
+  std::int64_t replay_run = 0;
   int wait_subscribers = 0;
   double wait_subscribers_s = 10;
   bool no_progress = false;
@@ -129,52 +133,12 @@ std::unique_ptr<vision::FrameSource> open_camera(const SweepConfig& config) {
   }
 }
 
-int run_sweep(const SweepArgs& args) {
-  SweepConfig config = load_sweep_config(args.sweep_file);
-  const std::string database = args.database.empty() ? config.database_path : args.database;
-  TelemetryEndpoints endpoints;
-  endpoints.publish = config.telemetry_publish;
-  endpoints.control = config.telemetry_control;
-  endpoints.allow_remote = config.telemetry_allow_remote;
-  validate_endpoints(endpoints);
-
-  // The camera first: a wrong calibration must stop the sweep before the bench moves.
-  std::unique_ptr<vision::FrameSource> camera = open_camera(config);
-
-  motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
-  if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
-
-  if (const auto parent = std::filesystem::path(database).parent_path(); !parent.empty())
-    std::filesystem::create_directories(parent);
-  db::StoreOptions store_options;
-  store_options.durable_commits = config.durable_commits;
-  store_options.record_store_time = true;
-  db::Store store(database, store_options);
-
-  SweepPlan plan = config.plan;
-  std::int64_t run_id = 0;
-  if (args.resume_run > 0) {
-    db::Run run;
-    try {
-      run = store.run(args.resume_run);
-    } catch (const db::StoreError& e) {
-      throw BadInput(std::string("--resume ") + std::to_string(args.resume_run) + ": " + e.what());
-    }
-    plan = plan_for_resume(run, config);
-    store.resume_run(run.id);
-    run_id = run.id;
-    store.record_event(run_id, "resume", "rig sweep --resume");
-  } else {
-    run_id = store.start_run(describe_run(config, plan));
-  }
-
-  // Homing is needed once per power-up of the drive; a resumed run on a homed
-  // bench does not drive it home and back.
-  if (config.home_first && !bench.status().homed) {
-    bench.home();
-    bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
-  }
-
+// What drives a run once the run exists: telemetry, control, the controller,
+// the summary. `again` is the command line that continues a run that did not
+// complete.
+int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan& plan,
+              motion::Bench& bench, vision::FrameSource& camera, db::Store& store,
+              std::int64_t run_id, const TelemetryEndpoints& endpoints, const std::string& again) {
   ControlState control;
   TelemetryPublisher publisher(endpoints.publish);
   std::mutex controller_mutex;
@@ -195,7 +159,7 @@ int run_sweep(const SweepArgs& args) {
               << args.wait_subscribers_s << " s; going on without\n";
   }
 
-  Controller controller(config, plan, bench, *camera, store, run_id, control, &publisher);
+  Controller controller(config, plan, bench, camera, store, run_id, control, &publisher);
   {
     std::lock_guard<std::mutex> lock(controller_mutex);
     live = &controller;
@@ -235,9 +199,113 @@ int run_sweep(const SweepArgs& args) {
               << " --out <folder>\n";
     return kExitOk;
   }
-  std::cout << "  resume:    rig sweep " << config.sweep_file << " --db " << store.path()
-            << " --resume " << run_id << "\n";
+  std::cout << "  " << again << "\n";
   return kExitFailure;
+}
+
+// rig sweep --replay RUN: the recorded run's plan, its saved frames, today's
+// calibration, layout, geometry and solvers, into a new run of the same
+// database. No bench and no camera are opened.
+int run_replay(const SweepArgs& args, const SweepConfig& loaded, const std::string& database,
+               const TelemetryEndpoints& endpoints) {
+  const std::string which = "--replay " + std::to_string(args.replay_run);
+  // A replay reads an existing database; it must not create an empty one.
+  if (!std::filesystem::exists(database))
+    throw BadInput(which + ": database " + database +
+                   " does not exist; expected the database of the run to replay (--db)");
+  db::StoreOptions store_options;
+  store_options.durable_commits = loaded.durable_commits;
+  store_options.record_store_time = true;
+  db::Store store(database, store_options);
+  std::shared_ptr<const RecordedRun> recorded;
+  try {
+    recorded = std::make_shared<const RecordedRun>(RecordedRun::load(store, args.replay_run));
+  } catch (const db::StoreError& e) {
+    throw BadInput(which + ": " + e.what());
+  } catch (const PlanError& e) {
+    throw BadInput(which + ": the run's stored plan: " + e.what());
+  }
+  const SweepConfig config = replay_config(loaded, *recorded);
+  const SweepPlan& plan = recorded->plan();
+
+  const nlohmann::json replay_of = {{"database", std::filesystem::absolute(store.path()).string()},
+                                    {"run", args.replay_run}};
+  const std::int64_t run_id =
+      store.start_run(describe_run(config, plan, {{"replay_of", replay_of}}));
+  store.record_event(run_id, "start", "rig sweep --replay " + std::to_string(args.replay_run));
+
+  auto cursor = std::make_shared<ReplayCursor>(recorded);
+  ReplayBench bench(cursor);
+  ReplayFrames frames(cursor);
+  frames.open();
+  return drive_run(args, config, plan, bench, frames, store, run_id, endpoints,
+                   "replay again: rig sweep " + config.sweep_file + " --db " + store.path() +
+                       " --replay " + std::to_string(args.replay_run) +
+                       " (a replay run is not resumed)");
+}
+
+int run_sweep(const SweepArgs& args) {
+  if (args.replay_run > 0 && args.resume_run > 0)
+    throw BadInput("--replay " + std::to_string(args.replay_run) + " and --resume " +
+                   std::to_string(args.resume_run) +
+                   " together: --replay measures a run's saved frames into a new run, --resume "
+                   "continues a run on the bench; expected one of them");
+  SweepConfig config = load_sweep_config(args.sweep_file);
+  const std::string database = args.database.empty() ? config.database_path : args.database;
+  TelemetryEndpoints endpoints;
+  endpoints.publish = config.telemetry_publish;
+  endpoints.control = config.telemetry_control;
+  endpoints.allow_remote = config.telemetry_allow_remote;
+  validate_endpoints(endpoints);
+  if (args.replay_run > 0) return run_replay(args, config, database, endpoints);
+
+  // The camera first: a wrong calibration must stop the sweep before the bench moves.
+  std::unique_ptr<vision::FrameSource> camera = open_camera(config);
+
+  motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
+  if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
+
+  if (const auto parent = std::filesystem::path(database).parent_path(); !parent.empty())
+    std::filesystem::create_directories(parent);
+  db::StoreOptions store_options;
+  store_options.durable_commits = config.durable_commits;
+  store_options.record_store_time = true;
+  db::Store store(database, store_options);
+
+  SweepPlan plan = config.plan;
+  std::int64_t run_id = 0;
+  if (args.resume_run > 0) {
+    db::Run run;
+    try {
+      run = store.run(args.resume_run);
+    } catch (const db::StoreError& e) {
+      throw BadInput(std::string("--resume ") + std::to_string(args.resume_run) + ": " + e.what());
+    }
+    const nlohmann::json stored_config =
+        nlohmann::json::parse(run.description.config_json, nullptr, false);
+    if (stored_config.is_object() && stored_config.contains("replay_of"))
+      throw BadInput("--resume " + std::to_string(run.id) + ": run " + std::to_string(run.id) +
+                     " is a replay (of " + stored_config["replay_of"].dump() +
+                     "); a replay is not resumed on the bench: replay the original run again "
+                     "with --replay");
+    plan = plan_for_resume(run, config);
+    store.resume_run(run.id);
+    run_id = run.id;
+    store.record_event(run_id, "resume", "rig sweep --resume");
+  } else {
+    run_id = store.start_run(describe_run(config, plan));
+  }
+
+  // Homing is needed once per power-up of the drive; a resumed run on a homed
+  // bench does not drive it home and back.
+  if (config.home_first && !bench.status().homed) {
+    bench.home();
+    bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
+  }
+
+  return drive_run(args, config, plan, bench, *camera, store, run_id, endpoints,
+                   "resume:    rig sweep " + config.sweep_file + " --db " + store.path() +
+                       " --resume " + std::to_string(run_id));
 }
 
 }  // namespace
@@ -259,6 +327,15 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
                   "Continue run RUN of the database from its first missing position (the "
                   "sweep file and the files it names must be those the run started with)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--replay", args->replay_run,
+                  "Measure the frames run RUN saved ([capture] save_frames) again, into a new "
+                  "run of the same database: the run's plan and recorded bench read-backs, this "
+                  "sweep file's calibration, target layout, rig geometry and frames_per_position "
+                  "(at most the run's), today's solvers. No bench or camera is used, no frames "
+                  "are saved again (each frame names its PNG as source), and every position is "
+                  "visited once (a position the run did not measure, or whose PNG is missing or "
+                  "changed, is stored as failed). Not with --resume.")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--wait-subscribers", args->wait_subscribers,
                   "Before the first move, wait for this many telemetry subscribers (rig "
                   "monitor), so that they see the whole run")
@@ -269,7 +346,9 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
   cmd->footer(
       "Example (with `rig sim --config config/sim.toml` running):\n"
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db\n"
-      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1");
+      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1\n"
+      "Replay run 1's saved frames (no rig needed) into a new run:\n"
+      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --replay 1");
   cmd->callback([&status, args] {
     try {
       status.code = run_sweep(*args);
