@@ -215,6 +215,8 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
     position_reprojection.add(g.reprojection.summary().mean);
     const stats::Summary gen = g.generalization.summary();
     if (gen.count > 0) position_generalization.add(gen.mean);
+    s.per_position.push_back({p.plan_index, g.abs_error.summary().mean,
+                              g.reprojection.summary().mean, gen.count > 0 ? gen.mean : kNaN});
     jitter_all.add(d);
     if (i % stride == 0) {
       s.plot_true_m.push_back(*p.true_distance_m);

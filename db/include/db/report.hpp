@@ -120,6 +120,15 @@ struct AngleClassStudy {
   std::size_t flip_checked = 0, flips = 0;
 };
 
+// One position's means over its used frames (run comparison pairs them by
+// plan index).
+struct PositionMeans {
+  std::int64_t plan_index = 0;
+  double abs_error_m = 0;        // mean |estimated - true|
+  double reprojection_px = 0;    // mean reprojection error
+  double generalization_px = 0;  // mean generalization error; NaN when absent
+};
+
 // Everything about one solver on one scope.
 struct SolverStudy {
   std::string solver, scope;
@@ -137,6 +146,7 @@ struct SolverStudy {
   // Per-position means (one number per position, independent across
   // positions, unlike frames of one position): what run comparison tests.
   stats::Summary position_abs_error_m, position_reprojection_px, position_generalization_px;
+  std::vector<PositionMeans> per_position;        // by plan index
   std::optional<stats::LineFit> ols;              // estimated = a * true + b (Tables 4, 5)
   std::optional<stats::EivFit> deming;            // same line, Deming (errors in both variables)
   double deming_delta = 0;                        // the error variance ratio it used
@@ -231,7 +241,10 @@ RunStudy study_run(const std::string& database, const ReportOptions& options);
 
 // Every figure of `candidate` against `baseline`, for the solvers and scopes
 // both have: mean |distance error|, mean reprojection and generalization error
-// (per-position means, Welch), failure rate (pooled two-proportion standard
+// (per-position means: paired by plan index when the runs share at least
+// two positions, the mean difference over its standard error, which removes
+// the spread of the errors over distance from the comparison; else Welch on
+// the two runs' per-position means), failure rate (pooled two-proportion standard
 // error), OLS slope and intercept, mean time per pose, and per distance
 // class the bias (mean over positions of their mean error; shown, not
 // counted). difference.significant uses k; worse and better the
