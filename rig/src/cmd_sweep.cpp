@@ -164,19 +164,12 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
     std::lock_guard<std::mutex> lock(controller_mutex);
     live = &controller;
   }
-  const bool terminal = isatty(STDERR_FILENO) && !args.no_progress;
-  ProgressView view;
-  controller.set_observer([&](const nlohmann::json& message) {
-    view.update(message);
-    if (terminal) {
-      std::cerr << "\r" << view.progress_line(100) << std::flush;
-      if (message.value("type", "") == "fault") std::cerr << "\n" << view.describe(message) << "\n";
-    } else if (message.value("type", "") == "position") {
-      std::cout << view.log_line(message) << std::endl;
-    } else {
-      std::cout << view.describe(message) << std::endl;
-    }
-  });
+  // On a terminal: a progress bar with ETA redrawn on stderr, faults and
+  // pauses as lines above it; otherwise one line per message on stdout.
+  const bool terminal = is_terminal(STDERR_FILENO) && !args.no_progress;
+  ProgressPrinter progress(terminal ? std::cerr : std::cout, terminal,
+                           terminal_width(100, STDERR_FILENO));
+  controller.set_observer([&](const nlohmann::json& message) { progress.update(message); });
 
   RunOutcome outcome;
   {
@@ -187,7 +180,6 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
     std::lock_guard<std::mutex> lock(controller_mutex);
     live = nullptr;
   }
-  if (terminal) std::cerr << "\n";
   std::cout << "rig sweep: run " << run_id << " " << db::to_string(outcome.status)
             << (outcome.reason.empty() ? "" : ": " + outcome.reason) << "\n"
             << "  positions: " << outcome.positions_ok << " ok, " << outcome.positions_failed
@@ -367,9 +359,12 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
     } catch (const db::SchemaError& e) {
       std::cerr << "rig sweep: " << e.what() << "\n";
       status.code = kExitBadInput;
-    } catch (const TelemetryError& e) {
+    } catch (const EndpointError& e) {
       std::cerr << "rig sweep: telemetry: " << e.what() << "\n";
       status.code = kExitBadInput;
+    } catch (const TelemetryError& e) {  // e.g. the port is taken by another sweep
+      std::cerr << "rig sweep: telemetry: " << e.what() << "\n";
+      status.code = kExitFailure;
     } catch (const vision::CaptureError& e) {
       std::cerr << "rig sweep: camera: " << e.what() << "\n";
       status.code = kExitFailure;
