@@ -149,7 +149,8 @@ std::int64_t pragma_int(sqlite::Connection& connection, const char* pragma) {
 
 // Reads the markers of the file and refuses it unless it is empty or ours at
 // a version we know. Returns the file's schema version (0 when empty).
-int check_file(sqlite::Connection& connection) {
+// `expected` says what the caller can use, for the message.
+int check_file(sqlite::Connection& connection, const char* expected) {
   const std::string& path = connection.path();
   std::int64_t objects = 0;
   std::int64_t application_id = 0;
@@ -165,7 +166,7 @@ int check_file(sqlite::Connection& connection) {
   } catch (const StoreError& e) {
     if (sqlite3_errcode(connection.handle()) == SQLITE_NOTADB) {
       throw SchemaError(path + ": not a SQLite database (" + sqlite3_errmsg(connection.handle()) +
-                        "); expected a rig run database or a new or empty file");
+                        "); expected " + expected);
     }
     throw;
   }
@@ -191,7 +192,9 @@ void open_and_migrate(sqlite::Connection& connection, const StoreOptions& option
   sqlite3_busy_timeout(connection.handle(), options.busy_timeout_ms);
   // Check before anything writes: another program's file must not even be
   // switched to WAL.
-  const int found = check_file(connection);
+  const int found =
+      check_file(connection, options.read_only ? "a rig run database (written by rig sweep)"
+                                               : "a rig run database or a new or empty file");
   if (options.read_only) {
     if (found == 0) {
       throw SchemaError(connection.path() +
@@ -222,7 +225,7 @@ void open_and_migrate(sqlite::Connection& connection, const StoreOptions& option
   // Again under the write lock: another process may have migrated the file
   // between the check above and now.
   sqlite::Transaction transaction(connection);
-  const int version = check_file(connection);
+  const int version = check_file(connection, "a rig run database or a new or empty file");
   if (version == Store::kSchemaVersion) return;  // nothing to do; rolls back the empty transaction
   if (version == 0) {
     connection.exec("PRAGMA application_id = " + std::to_string(Store::kApplicationId));
