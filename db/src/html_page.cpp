@@ -8,6 +8,8 @@
 #include <utility>
 #include <vector>
 
+#include "svg_detail.hpp"
+
 namespace db::html {
 namespace {
 
@@ -97,31 +99,10 @@ bool id_is_valid(const std::string& id) {
 
 }  // namespace
 
+// The page's text and the figures' text are escaped alike (XML-safe, control
+// characters become spaces): one rule for everything the report writes.
 std::string escape(std::string_view text) {
-  std::string out;
-  out.reserve(text.size());
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
+  return svg::detail::escape(text);
 }
 
 Page::Page(std::string title) : title_(std::move(title)) {}
