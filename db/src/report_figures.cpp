@@ -77,7 +77,8 @@ svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
   f.caption = "Markers: each position's mean estimate (at most " +
               std::to_string(in.study.options.max_points_per_series) +
               " positions per solver drawn); lines: the least-squares fit over every estimate "
-              "(dashed: the baseline's fit).";
+              "(dashed: the paper's fit from its Table 4 where it has one on this scale, and the "
+              "baseline's fit).";
   f.width_px = 760;
   f.height_px = 520;
   for (const SolverStudy& s : in.study.solvers) {
@@ -100,6 +101,22 @@ svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
       return l;
     };
     f.series.push_back(line(*s.ols, false, ""));
+    // The paper's own fit (Table 4), from its pose marker, beside ours.
+    if (scope != "target") {
+      const auto paper = paper_values(s.solver);
+      // Only where it stays on the figure's scale: the paper's EKF fit
+      // (a = 2.60, b = -1.10) would squash every other line flat.
+      const auto on_scale = [&](double x) {
+        const double y = paper->slope * x + paper->intercept_m;
+        return y >= 0 && y <= 1.5 * *hi;
+      };
+      if (paper && on_scale(*lo) && on_scale(*hi)) {
+        stats::LineFit fit;
+        fit.slope = paper->slope;
+        fit.intercept = paper->intercept_m;
+        f.series.push_back(line(fit, true, s.solver + " (paper's fit, Table 4)"));
+      }
+    }
     if (in.baseline) {
       const SolverStudy* b = in.baseline->find(s.solver, scope);
       if (b != nullptr && b->ols)

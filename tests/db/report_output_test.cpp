@@ -80,6 +80,18 @@ TEST_F(ReportOutput, WritesHtmlJsonAndCsvThatAgree) {
   EXPECT_NE(html.find("paper: H. OI"), std::string::npos);
   EXPECT_NE(html.find("1.0084"), std::string::npos);  // paper Table 4, hybrid OI slope
   EXPECT_FALSE(json["regressed"].get<bool>());
+  // Fig. 12 draws the paper's own fit (Table 4) for the solvers it studied,
+  // on the scale of ours: hybrid OI's (a 1.0084, b 0.0068) is; EKF's
+  // (a 2.6034, b -1.1006, negative below 0.42 m) is not.
+  for (const auto& f : json["figures"]) {
+    if (f["id"] != "fig12-0") continue;
+    std::vector<std::string> labels;
+    for (const auto& series : f["series"])
+      labels.push_back(series["label"]);
+    EXPECT_NE(std::find(labels.begin(), labels.end(), "hybrid_oi (paper's fit, Table 4)"),
+              labels.end());
+    EXPECT_EQ(std::find(labels.begin(), labels.end(), "ekf (paper's fit, Table 4)"), labels.end());
+  }
 }
 
 TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
