@@ -15,6 +15,7 @@
 #include "db/sha256.hpp"
 #include "motion/errors.hpp"
 #include "rig/ground_truth.hpp"
+#include "telemetry_messages.hpp"
 
 namespace rig {
 namespace {
@@ -41,58 +42,7 @@ struct PositionFailure {
   std::string reason;
 };
 
-db::DetectionRecord to_record(const vision::Detection& d) {
-  db::DetectionRecord r;
-  r.marker_id = d.id;
-  r.rotation = d.rotation;
-  for (int k = 0; k < 4; ++k) {
-    r.corners_px[2 * k] = d.corners_px[k].x();
-    r.corners_px[2 * k + 1] = d.corners_px[k].y();
-  }
-  r.contrast = d.quality.contrast;
-  r.bits_corrected = d.quality.bits_corrected;
-  r.edge_fit_residual_px = d.quality.edge_fit_residual_px;
-  return r;
-}
-
-db::EstimateRecord to_record(const ScopeEstimate& s) {
-  const vision::Estimate& e = s.estimate;
-  db::EstimateRecord r;
-  r.solver = e.solver;
-  r.scope = s.scope;
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j)
-      r.R_cam_target[3 * i + j] = e.T_cam_target.R(i, j);
-    r.t_cam_target_m[i] = e.T_cam_target.t(i);
-  }
-  // A solver that did not apply or failed numerically may leave NaN in the
-  // pose; the database keeps numbers, and `converged` says whether to use them.
-  for (double& v : r.R_cam_target)
-    if (!std::isfinite(v)) v = 0;
-  for (double& v : r.t_cam_target_m)
-    if (!std::isfinite(v)) v = 0;
-  r.distance_m = std::isfinite(e.distance_m) ? e.distance_m : 0;
-  r.reprojection_error_px = std::isfinite(e.reprojection_error_px) ? e.reprojection_error_px : -1;
-  r.generalization_error_px = s.generalization_error_px;
-  r.iterations = e.iterations;
-  r.converged = e.converged;
-  r.termination = e.applicable() ? vision::to_string(e.termination) : "skipped";
-  r.time_us = e.time_us;
-  r.ambiguity_ratio = e.ambiguity_ratio;
-  return r;
-}
-
 }  // namespace
-
-db::FrameRecord to_frame_record(const FrameMeasurement& m, int frame_index) {
-  db::FrameRecord f;
-  f.index = frame_index;
-  for (const auto& d : m.detections)
-    f.detections.push_back(to_record(d));
-  for (const auto& e : m.estimates)
-    f.estimates.push_back(to_record(e));
-  return f;
-}
 
 struct Controller::Impl {
   const SweepConfig& config;
@@ -348,72 +298,9 @@ struct Controller::Impl {
   }
 
   nlohmann::json position_message(const db::PositionRecord& rec) const {
-    nlohmann::json estimates = nlohmann::json::array();
-    // Means over the frames, per solver and scope.
-    struct Sum {
-      double distance = 0, reprojection = 0, generalization = 0;
-      int n = 0, n_generalization = 0;
-      bool converged = true;
-    };
-    std::map<std::pair<std::string, std::string>, Sum> sums;
-    std::vector<std::pair<std::string, std::string>> order;
-    std::size_t markers = 0;
-    for (const auto& f : rec.frames) {
-      markers = std::max(markers, f.detections.size());
-      for (const auto& e : f.estimates) {
-        const auto key = std::make_pair(e.solver, e.scope);
-        if (!sums.count(key)) order.push_back(key);
-        Sum& s = sums[key];
-        s.converged = s.converged && e.converged;
-        if (!e.converged) continue;
-        s.distance += e.distance_m;
-        s.reprojection += e.reprojection_error_px;
-        ++s.n;
-        if (e.generalization_error_px) {
-          s.generalization += *e.generalization_error_px;
-          ++s.n_generalization;
-        }
-      }
-    }
-    for (const auto& key : order) {
-      const Sum& s = sums[key];
-      nlohmann::json j = {{"solver", key.first}, {"scope", key.second}, {"converged", s.converged}};
-      if (s.n > 0) {
-        j["distance_m"] = s.distance / s.n;
-        j["distance_error_m"] = rec.true_distance_m
-                                    ? nlohmann::json(s.distance / s.n - *rec.true_distance_m)
-                                    : nlohmann::json(nullptr);
-        j["reprojection_error_px"] = s.reprojection / s.n;
-      } else {
-        j["distance_m"] = j["distance_error_m"] = j["reprojection_error_px"] = nullptr;
-      }
-      j["generalization_error_px"] = s.n_generalization > 0
-                                         ? nlohmann::json(s.generalization / s.n_generalization)
-                                         : nlohmann::json(nullptr);
-      estimates.push_back(std::move(j));
-    }
-    nlohmann::json stages = nlohmann::json::object();
-    for (const auto& st : rec.stage_times)
-      stages[st.stage] = st.seconds;
-    auto optional = [](const std::optional<double>& v) {
-      return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
-    };
     std::lock_guard<std::mutex> lock(mutex);
-    return {{"type", "position"},
-            {"run_id", run_id},
-            {"plan_index", rec.plan_index},
-            {"completed", stored},
-            {"plan_size", plan.size()},
-            {"status", db::to_string(rec.status)},
-            {"failure_reason", rec.failure_reason},
-            {"commanded", {{"x_mm", rec.commanded_x_mm}, {"y_mm", rec.commanded_y_mm}}},
-            {"measured",
-             {{"x_mm", optional(rec.measured_x_mm)}, {"y_mm", optional(rec.measured_y_mm)}}},
-            {"true_distance_m", optional(rec.true_distance_m)},
-            {"markers_detected", markers},
-            {"estimates", estimates},
-            {"stage_times_s", stages},
-            {"elapsed_s", elapsed_s}};
+    return rig::position_message(rec, run_id, stored, static_cast<std::int64_t>(plan.size()),
+                                 elapsed_s);
   }
 
   RunOutcome run() {
