@@ -124,7 +124,13 @@ std::unique_ptr<vision::FrameSource> open_camera(const SweepConfig& config) {
       check_camera(*camera, config);
       return camera;
     } catch (const vision::CaptureError& e) {
-      if (std::chrono::steady_clock::now() > deadline) throw;
+      // A camera that answers but refuses us (held by another controller)
+      // or sends nothing is worth asking again; one that does not answer at
+      // all is absent, and waiting would only delay the message.
+      const std::string why = e.what();
+      const bool held = dynamic_cast<const vision::CaptureTimeout*>(&e) != nullptr ||
+                        why.find(" refused") != std::string::npos;
+      if (!held || std::chrono::steady_clock::now() > deadline) throw;
       std::cerr << "rig sweep: camera attempt " << attempt << ": " << e.what()
                 << "; asking again (a controller that died may hold the camera until its "
                 << "heartbeat expires)\n";
