@@ -139,24 +139,51 @@ std::unique_ptr<vision::FrameSource> open_camera(const SweepConfig& config) {
   }
 }
 
-// What drives a run once the run exists: telemetry, control, the controller,
-// the summary. `again` is the command line that continues a run that did not
+// Telemetry and control of one sweep. Bound before anything else happens, so
+// that a second sweep on the same ports stops before it touches the camera,
+// the bench or the database.
+class LiveLink {
+ public:
+  explicit LiveLink(const TelemetryEndpoints& endpoints)
+      : publisher(endpoints.publish),
+        server_(endpoints.control, control, [this] { return status(); }) {}
+
+  // The controller the control socket's `status` describes (null: none yet).
+  void attach(Controller* controller, std::int64_t run_id) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    live_ = controller;
+    run_id_ = run_id;
+  }
+  std::string control_endpoint() const { return server_.endpoint(); }
+
+  ControlState control;
+  TelemetryPublisher publisher;
+
+ private:
+  nlohmann::json status() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!live_) return {{"state", "starting"}, {"run_id", run_id_}};
+    return live_->status();
+  }
+
+  std::mutex mutex_;
+  Controller* live_ = nullptr;
+  std::int64_t run_id_ = 0;
+  ControlServer server_;  // last: its thread calls status() until it is destroyed
+};
+
+// What drives a run once the run exists: the controller, progress, the
+// summary. `again` is the command line that continues a run that did not
 // complete.
 int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan& plan,
               motion::Bench& bench, vision::FrameSource& camera, db::Store& store,
-              std::int64_t run_id, const TelemetryEndpoints& endpoints, const std::string& again) {
-  ControlState control;
-  TelemetryPublisher publisher(endpoints.publish);
-  std::mutex controller_mutex;
-  Controller* live = nullptr;
-  ControlServer server(endpoints.control, control, [&]() -> nlohmann::json {
-    std::lock_guard<std::mutex> lock(controller_mutex);
-    if (!live) return {{"state", "starting"}, {"run_id", run_id}};
-    return live->status();
-  });
+              std::int64_t run_id, LiveLink& link, const std::string& again) {
+  ControlState& control = link.control;
+  TelemetryPublisher& publisher = link.publisher;
+  link.attach(nullptr, run_id);
   std::cout << "rig sweep: run " << run_id << " in " << store.path() << ", " << plan.size()
             << " positions (" << plan.description() << "), telemetry " << publisher.endpoint()
-            << ", control " << server.endpoint() << std::endl;
+            << ", control " << link.control_endpoint() << std::endl;
   if (args.wait_subscribers > 0 &&
       !publisher.wait_for_subscribers(
           args.wait_subscribers,
@@ -166,10 +193,7 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
   }
 
   Controller controller(config, plan, bench, camera, store, run_id, control, &publisher);
-  {
-    std::lock_guard<std::mutex> lock(controller_mutex);
-    live = &controller;
-  }
+  link.attach(&controller, run_id);
   // On a terminal: a progress bar with ETA redrawn on stderr, faults and
   // pauses as lines above it; otherwise one line per message on stdout.
   const bool terminal = is_terminal(STDERR_FILENO) && !args.no_progress;
@@ -182,10 +206,7 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
     SignalWatch signals(control);
     outcome = controller.run();
   }
-  {
-    std::lock_guard<std::mutex> lock(controller_mutex);
-    live = nullptr;
-  }
+  link.attach(nullptr, run_id);
   std::cout << "rig sweep: run " << run_id << " " << db::to_string(outcome.status)
             << (outcome.reason.empty() ? "" : ": " + outcome.reason) << "\n"
             << "  positions: " << outcome.positions_ok << " ok, " << outcome.positions_failed
@@ -205,7 +226,7 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
 // calibration, layout, geometry and solvers, into a new run of the same
 // database. No bench and no camera are opened.
 int run_replay(const SweepArgs& args, const SweepConfig& loaded, const std::string& database,
-               const TelemetryEndpoints& endpoints) {
+               LiveLink& link) {
   const std::string which = "--replay " + std::to_string(args.replay_run);
   // A replay reads an existing database; it must not create an empty one.
   if (!std::filesystem::exists(database))
@@ -236,7 +257,7 @@ int run_replay(const SweepArgs& args, const SweepConfig& loaded, const std::stri
   ReplayBench bench(cursor);
   ReplayFrames frames(cursor);
   frames.open();
-  return drive_run(args, config, plan, bench, frames, store, run_id, endpoints,
+  return drive_run(args, config, plan, bench, frames, store, run_id, link,
                    "replay again: rig sweep " + config.sweep_file + " --db " + store.path() +
                        " --replay " + std::to_string(args.replay_run) +
                        " (a replay run is not resumed)");
@@ -255,7 +276,8 @@ int run_sweep(const SweepArgs& args) {
   endpoints.control = config.telemetry_control;
   endpoints.allow_remote = config.telemetry_allow_remote;
   validate_endpoints(endpoints);
-  if (args.replay_run > 0) return run_replay(args, config, database, endpoints);
+  LiveLink link(endpoints);
+  if (args.replay_run > 0) return run_replay(args, config, database, link);
 
   // The camera first: a wrong calibration must stop the sweep before the bench moves.
   std::unique_ptr<vision::FrameSource> camera = open_camera(config);
@@ -301,7 +323,7 @@ int run_sweep(const SweepArgs& args) {
     bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
   }
 
-  return drive_run(args, config, plan, bench, *camera, store, run_id, endpoints,
+  return drive_run(args, config, plan, bench, *camera, store, run_id, link,
                    "resume:    rig sweep " + config.sweep_file + " --db " + store.path() +
                        " --resume " + std::to_string(run_id));
 }

@@ -358,3 +358,20 @@ TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPau
 }
 
 }  // namespace
+
+namespace {
+
+TEST(SweepEndToEnd, ASecondSweepOnTakenTelemetryPortsStopsBeforeTouchingAnything) {
+  SimRig rig;
+  const std::string sweep = rig.write_sweep(SweepFileOptions{});
+  rig::TelemetryPublisher first("tcp://127.0.0.1:5656");  // another sweep's telemetry
+  const motion::XY before = rig.bench().actual_position_mm();
+  const rig_test::RigRun run = rig_test::run_rig("sweep " + sweep);
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("tcp://127.0.0.1:5656"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(rig.database()));  // no run was started
+  EXPECT_EQ(rig.bench().actual_position_mm().x_mm, before.x_mm);
+  EXPECT_EQ(rig.camera().frames_rendered(), 0u);
+}
+
+}  // namespace
