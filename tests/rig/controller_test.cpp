@@ -210,3 +210,27 @@ TEST_F(ControllerTest, AResumedRunMeasuresOnlyWhatIsMissing) {
 }
 
 }  // namespace
+
+namespace {
+
+TEST_F(ControllerTest, AResumeRefusesAFileThatChangedSinceTheRunStarted) {
+  bench_.on_settle.push_back([this] { control_.request_abort("stop"); });
+  sweep();
+  const db::Run run = store_->run(run_);
+  // Unchanged files: the stored plan comes back.
+  EXPECT_EQ(rig::plan_for_resume(run, config_).size(), config_.plan.size());
+  // The drive profile is now another file: the run would be measured with
+  // something other than what it started with.
+  config_.bench_profile_path = std::string(RIG_SOURCE_DIR) + "/tests/motion/pymodbus_drive.toml";
+  try {
+    rig::plan_for_resume(run, config_);
+    FAIL() << "resumed with a changed file";
+  } catch (const rig::RunMismatch& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("pymodbus_drive.toml differs from the copy the run stored"),
+        std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
