@@ -38,14 +38,23 @@ void compare_summaries(std::vector<ComparedFigure>& out, const SolverStudy& c,
 }
 
 // A per-position mean of this run against the baseline's. Paired by plan
-// index when the runs share at least two positions: the differences d_p of
-// the same positions are independent across positions, and their mean over
+// index when both runs ran the same plan (their run descriptions' plan_json
+// are identical text, so plan index i is the same commanded position in both)
+// and share at least two measured positions: the differences d_p of the same
+// positions are independent across positions, and their mean over
 // sd(d)/sqrt(n) tests the change without the spread of the errors over
-// distance (which dominates Welch's standard error on a sweep over
-// 0.1-1 m). Otherwise Welch on the two runs' per-position summaries.
+// distance (which dominates Welch's standard error on a sweep over 0.1-1 m).
+// Otherwise Welch on the two runs' per-position summaries, and the figure's
+// name says why: pairing positions of different plans would compare errors at
+// different distances as if they were the same position's.
 void compare_positions(std::vector<ComparedFigure>& out, const SolverStudy& c, const SolverStudy& b,
-                       const std::string& figure, double PositionMeans::*member,
+                       bool same_plan, const std::string& figure, double PositionMeans::*member,
                        const stats::Summary& c_all, const stats::Summary& b_all, double k) {
+  if (!same_plan) {
+    compare_summaries(out, c, figure + ", Welch (the runs' plans differ: not paired)", c_all, b_all,
+                      k, +1);
+    return;
+  }
   stats::RunningSummary diff, c_mean, b_mean;
   std::size_t j = 0;
   for (const PositionMeans& p : c.per_position) {
@@ -60,7 +69,8 @@ void compare_positions(std::vector<ComparedFigure>& out, const SolverStudy& c, c
   }
   const stats::Summary d = diff.summary();
   if (d.count < 2) {
-    compare_summaries(out, c, figure + ", Welch", c_all, b_all, k, +1);
+    compare_summaries(out, c, figure + ", Welch (fewer than two shared positions)", c_all, b_all, k,
+                      +1);
     return;
   }
   const double se = d.sd / std::sqrt(static_cast<double>(d.count));
@@ -125,18 +135,25 @@ void compare_classes(std::vector<ComparedFigure>& out, const SolverStudy& c, con
 
 }  // namespace
 
+bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline) {
+  return candidate.run.description.plan_json == baseline.run.description.plan_json;
+}
+
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
                                          double k) {
   std::vector<ComparedFigure> out;
+  const bool same_plan = same_plan_of(candidate, baseline);
   for (const SolverStudy& c : candidate.solvers) {
     const SolverStudy* b = baseline.find(c.solver, c.scope);
     if (b == nullptr) continue;
-    compare_positions(out, c, *b, "mean |distance error| (m)", &PositionMeans::abs_error_m,
-                      c.position_abs_error_m, b->position_abs_error_m, k);
-    compare_positions(out, c, *b, "mean reprojection error (px)", &PositionMeans::reprojection_px,
-                      c.position_reprojection_px, b->position_reprojection_px, k);
+    compare_positions(out, c, *b, same_plan, "mean |distance error| (m)",
+                      &PositionMeans::abs_error_m, c.position_abs_error_m, b->position_abs_error_m,
+                      k);
+    compare_positions(out, c, *b, same_plan, "mean reprojection error (px)",
+                      &PositionMeans::reprojection_px, c.position_reprojection_px,
+                      b->position_reprojection_px, k);
     if (c.position_generalization_px.count > 0 && b->position_generalization_px.count > 0) {
-      compare_positions(out, c, *b, "mean generalization error (px)",
+      compare_positions(out, c, *b, same_plan, "mean generalization error (px)",
                         &PositionMeans::generalization_px, c.position_generalization_px,
                         b->position_generalization_px, k);
     }

@@ -327,6 +327,13 @@ void add_comparison(const ReportInput& in, Section& sec) {
       "per-position means (frames of one position share its pose and are not independent); "
       "times, line parameters and class biases are flagged but never counted. Whole-run "
       "means depend on the distances visited: compare runs of the same plan.");
+  if (in.baseline && !same_plan_of(in.study, *in.baseline)) {
+    sec.paragraph(
+        "The two runs ran different plans (their plan descriptions differ), so plan index i is "
+        "not the same position in both: the per-position errors are compared by Welch's test on "
+        "each run's per-position means, not paired position by position. Differences in the "
+        "distances visited show up as differences of these means.");
+  }
   html::Table t{"comparison",
                 "Every compared figure: this run against the baseline",
                 {"solver", "scope", "figure", "this run", "baseline", "difference",

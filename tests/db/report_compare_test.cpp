@@ -13,6 +13,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include "db/report.hpp"
 #include "store_fixture.hpp"
@@ -93,6 +96,85 @@ TEST(ReportCompare, ASolverThatGotWorseIsFlaggedAndOnlyIt) {
   }
   EXPECT_TRUE(distance);
   EXPECT_TRUE(reprojection);
+}
+
+// A solver whose error grows steeply with distance (5 % of it) and scatters
+// little, in two runs of different plans: the baseline's positions are the
+// candidate's moved 10 mm closer. Paired by plan index, every pair would
+// differ by 0.05 * 10 mm = 0.5 mm against a standard error of the mean pair
+// difference of 0.5 mm * sqrt(2/3) / sqrt(150) = 0.033 mm (z ~ 15, "worse"),
+// though the solver did not change. Welch on the per-position means sees the
+// spread of the errors over the 0.86 m range, 0.05 * 0.86 / sqrt(12) = 12 mm,
+// so its standard error is 12 mm * sqrt(2/150) = 1.4 mm and z ~ 0.35.
+SyntheticRunSpec steep_spec(std::uint64_t seed, double shift_m) {
+  SyntheticRunSpec spec;
+  spec.seed = seed;
+  spec.positions = 150;
+  spec.min_distance_m = 0.12 - shift_m;
+  spec.max_distance_m = 0.98 - shift_m;
+  rig_test::SyntheticSolver steep;
+  steep.name = "steep";
+  steep.slope = 1.05;
+  steep.intercept_m = 0.0;
+  steep.frame_sd_m = 0.0005;
+  spec.solvers = {steep};
+  return spec;
+}
+
+TEST(ReportCompare, BaselineOfAnotherPlanIsComparedByWelchNotPaired) {
+  db_test::ScratchDir dir;
+  rig_test::write_synthetic_run(dir.file("a.db"), steep_spec(41, 0.0));
+  rig_test::write_synthetic_run(dir.file("b.db"), steep_spec(42, 0.010));
+  const db::Report report(dir.file("a.db"), db::ReportOptions{},
+                          db::RunReference::parse(dir.file("b.db")));
+  ASSERT_TRUE(report.baseline().has_value());
+  EXPECT_FALSE(db::same_plan_of(report.study(), *report.baseline()));
+  std::size_t welch = 0;
+  for (const db::ComparedFigure& f : report.comparison()) {
+    EXPECT_EQ(f.figure.find("paired over"), std::string::npos) << f.figure;
+    EXPECT_FALSE(f.worse) << f.solver << " " << f.scope << " " << f.figure << " z "
+                          << f.difference.z;
+    welch += f.figure.find("Welch (the runs' plans differ") != std::string::npos ? 1 : 0;
+  }
+  // Distance and reprojection error on both scopes, generalization on "0".
+  EXPECT_EQ(welch, 5u);
+  EXPECT_FALSE(report.regressed());
+
+  const db::ReportFiles files = report.write(dir.file("out"));
+  std::ifstream html(files.html);
+  const std::string page((std::istreambuf_iterator<char>(html)), std::istreambuf_iterator<char>());
+  EXPECT_NE(page.find("ran different plans"), std::string::npos);
+}
+
+// The Welch fallback compares the two runs' per-position means as
+// independent samples: se^2 = s1^2/n1 + s2^2/n2 and z = difference / se, from
+// the studies' own per-position summaries (1e-12 relative: the same doubles
+// through a few operations).
+TEST(ReportCompare, WelchFallbackUsesThePerPositionSummaries) {
+  db_test::ScratchDir dir;
+  rig_test::write_synthetic_run(dir.file("a.db"), steep_spec(43, 0.0));
+  rig_test::write_synthetic_run(dir.file("b.db"), steep_spec(44, 0.050));
+  const db::Report report(dir.file("a.db"), db::ReportOptions{},
+                          db::RunReference::parse(dir.file("b.db")));
+  const db::SolverStudy* c = report.study().find("steep", "0");
+  const db::SolverStudy* b = report.baseline()->find("steep", "0");
+  ASSERT_NE(c, nullptr);
+  ASSERT_NE(b, nullptr);
+  const db::ComparedFigure* distance = nullptr;
+  for (const db::ComparedFigure& f : report.comparison()) {
+    if (f.scope == "0" && f.figure.find("distance error") != std::string::npos) distance = &f;
+  }
+  ASSERT_NE(distance, nullptr);
+  const db::stats::Summary& cs = c->position_abs_error_m;
+  const db::stats::Summary& bs = b->position_abs_error_m;
+  EXPECT_EQ(cs.count, 150u);
+  EXPECT_DOUBLE_EQ(distance->candidate, cs.mean);
+  EXPECT_DOUBLE_EQ(distance->baseline, bs.mean);
+  const double se = std::sqrt(cs.variance / static_cast<double>(cs.count) +
+                              bs.variance / static_cast<double>(bs.count));
+  EXPECT_NEAR(distance->difference.standard_error, se, 1e-12 * se);
+  EXPECT_NEAR(distance->difference.z, (cs.mean - bs.mean) / se, 1e-9);
+  EXPECT_TRUE(distance->counted);
 }
 
 TEST(ReportCompare, ParsesTheBaselineReference) {

@@ -52,7 +52,11 @@ db::RunDescription description(const SyntheticRunSpec& spec) {
   db::RunDescription d;
   d.config_json = "{\"frames_per_position\":" + std::to_string(spec.frames_per_position) +
                   ",\"synthetic\":true}";
-  d.plan_json = "{\"kind\":\"synthetic\",\"positions\":" + std::to_string(spec.positions) + "}";
+  // The plan is the positions' true distances: two specs with different
+  // ranges ran different plans.
+  d.plan_json = "{\"kind\":\"synthetic\",\"positions\":" + std::to_string(spec.positions) +
+                ",\"min_distance_m\":" + std::to_string(spec.min_distance_m) +
+                ",\"max_distance_m\":" + std::to_string(spec.max_distance_m) + "}";
   d.plan_size = spec.positions;
   d.sweep_file = {"synthetic.toml", "# synthetic\n", ""};
   d.camera_calibration = {"xc555.yaml", "%YAML:1.0\n", ""};

@@ -239,13 +239,21 @@ struct RunReference {
 // above); StoreError for a failure while reading.
 RunStudy study_run(const std::string& database, const ReportOptions& options);
 
+// Whether the two runs ran the same plan: their run descriptions' plan_json
+// are identical text (the plan's positions in plan-index order), so that plan
+// index i is the same commanded position in both and the runs' per-position
+// errors can be paired. Two plans that differ only in formatting count as
+// different (Welch is used then: valid, only less sensitive).
+bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline);
+
 // Every figure of `candidate` against `baseline`, for the solvers and scopes
 // both have: mean |distance error|, mean reprojection and generalization error
-// (per-position means: paired by plan index when the runs share at least
-// two positions, the mean difference over its standard error, which removes
-// the spread of the errors over distance from the comparison; else Welch on
-// the two runs' per-position means), failure rate (pooled two-proportion standard
-// error), OLS slope and intercept, mean time per pose, and per distance
+// (per-position means: paired by plan index when the runs ran the same plan,
+// see same_plan_of, and share at least two measured positions, the mean
+// difference over its standard error, which removes the spread of the errors
+// over distance from the comparison; else Welch on the two runs'
+// per-position means, the figure's name saying why), failure rate (pooled
+// two-proportion standard error), OLS slope and intercept, mean time per pose, and per distance
 // class the bias (mean over positions of their mean error; shown, not
 // counted). difference.significant uses k; worse and better the
 // family-wise regression_k.
