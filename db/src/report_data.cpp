@@ -238,12 +238,20 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
         if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
         current_plan = plan;
       }
-      CornerSeries& s = series[select.get_int(2)];
       std::array<double, 8> c;
-      for (int k = 0; k < 8; ++k)
+      bool finite = true;
+      for (int k = 0; k < 8; ++k) {
         c[k] = select.get_double(3 + k);
+        finite = finite && std::isfinite(c[k]);
+      }
+      const double edge = select.get_double(11);
+      if (!finite || !std::isfinite(edge)) {
+        ++data.nonfinite_detections;
+        continue;
+      }
+      CornerSeries& s = series[select.get_int(2)];
       s.corners.push_back(c);
-      s.edge.add(select.get_double(11));
+      s.edge.add(edge);
     }
     if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
   }

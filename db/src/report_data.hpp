@@ -74,6 +74,10 @@ struct RunData {
   std::vector<SolverScopeData> solvers;                  // sorted by solver, scope
   std::map<std::string, std::vector<FlipSample>> flips;  // by solver
   std::vector<RunEvent> events;
+  // Detections with a non-finite corner coordinate or edge-fit residual: a
+  // detector bug, left out of every detection figure (as if not detected)
+  // and counted here rather than poisoning the corner noise.
+  std::size_t nonfinite_detections = 0;
 };
 
 // Opens `database` read-only and picks the run (run_id or the latest

@@ -80,6 +80,10 @@ Section overview(const ReportInput& in) {
   row("viewing angles", s.viewing_angles_recorded ? "recorded" : "not recorded");
   row("Cramér-Rao distance bounds", s.distance_bounds_recorded ? "recorded" : "not recorded");
   row("visible markers", s.visible_markers_recorded ? "recorded" : "not recorded");
+  row("detections with a non-finite corner or edge residual (not used)",
+      std::to_string(s.nonfinite_detections));
+  row("visible markers with a non-finite side (not used)",
+      std::to_string(s.nonfinite_visible_markers));
   sec.table(std::move(t));
   if (in.baseline) {
     sec.paragraph("Baseline: " + run_line(*in.baseline) +

@@ -132,6 +132,8 @@ json to_json(const RunStudy& st) {
           {"viewing_angles_recorded", st.viewing_angles_recorded},
           {"distance_bounds_recorded", st.distance_bounds_recorded},
           {"visible_markers_recorded", st.visible_markers_recorded},
+          {"nonfinite_detections", st.nonfinite_detections},
+          {"nonfinite_visible_markers", st.nonfinite_visible_markers},
           {"solvers", solvers},
           {"corner_noise", corner},
           {"marker_sizes", sizes},

@@ -298,7 +298,10 @@ std::vector<StageStudy> study_stages(const RunData& data) {
 }
 
 // Detection rate and corner quality against the marker's side length in px.
-std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visible_recorded) {
+// Visible markers with a non-finite side are left out and counted in
+// nonfinite_sides.
+std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visible_recorded,
+                                                std::size_t& nonfinite_sides) {
   // (side px, expected frames, marker at position or nullptr)
   struct Item {
     double side_px;
@@ -313,11 +316,17 @@ std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visibl
       return nullptr;
     };
     if (visible_recorded) {
-      for (const VisibleMarker& v : p.record.visible_markers)
+      for (const VisibleMarker& v : p.record.visible_markers) {
+        if (!std::isfinite(v.side_px)) {
+          ++nonfinite_sides;
+          continue;
+        }
         items.push_back({v.side_px, p.frames, find(v.marker_id)});
+      }
     } else {
-      for (const MarkerAtPosition& m : p.markers)
-        items.push_back({m.side_px, 0, &m});
+      for (const MarkerAtPosition& m : p.markers) {
+        if (std::isfinite(m.side_px)) items.push_back({m.side_px, 0, &m});
+      }
     }
   }
   if (items.empty()) return {};
@@ -384,7 +393,9 @@ RunStudy compute_study(const RunData& data, const ReportOptions& options) {
     study.solvers.push_back(study_solver(data, rows, study.corner_noise, options));
   }
   study.stages = study_stages(data);
-  study.marker_sizes = study_marker_sizes(data, study.visible_markers_recorded);
+  study.nonfinite_detections = data.nonfinite_detections;
+  study.marker_sizes =
+      study_marker_sizes(data, study.visible_markers_recorded, study.nonfinite_visible_markers);
   return study;
 }
 

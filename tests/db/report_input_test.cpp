@@ -153,6 +153,40 @@ TEST(ReportQueries, UseTheIndexesAndScanNoTable) {
   sqlite3_close(db);
 }
 
+// A detection with an infinite corner and a visible marker with an infinite
+// side (detector or simulator bugs) are left out and counted; the corner
+// noise, efficiency and marker-size figures stay finite.
+TEST(ReportInput, NonFiniteDetectionsAndSidesAreCountedNotUsed) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("inf_detection.db");
+  SyntheticRunSpec spec = small_spec();
+  spec.plant_nonfinite_detection = true;
+  spec.marker3_lost_beyond_m = 10.0;  // every visible marker is detected
+  rig_test::write_synthetic_run(path, spec);
+  const db::RunStudy st = db::study_run(path, {});
+  EXPECT_EQ(st.nonfinite_detections, 1u);
+  EXPECT_EQ(st.nonfinite_visible_markers, 1u);
+  // Plan index 0 (0.12 m) is in the first distance class.
+  EXPECT_TRUE(std::isfinite(st.corner_noise[0].sigma_px));
+  const db::SolverStudy* s = st.find("hybrid_oi", "0");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(std::isfinite(s->classes[0].efficiency));
+  std::size_t expected = 0, detected = 0;
+  for (const db::MarkerSizeClass& m : st.marker_sizes) {
+    expected += m.expected;
+    detected += m.detected;
+    EXPECT_TRUE(std::isfinite(m.lower_px) && std::isfinite(m.upper_px));
+    if (m.edge_fit_residual_px.count > 0) {
+      EXPECT_TRUE(std::isfinite(m.edge_fit_residual_px.mean));
+    }
+  }
+  // Every visible marker x frame but the frames of the infinite side; all
+  // of them detected but the infinite detection.
+  const std::size_t frames = static_cast<std::size_t>(spec.frames_per_position);
+  EXPECT_EQ(expected, 4 * st.frames - frames);
+  EXPECT_EQ(detected, expected - 1);
+}
+
 }  // namespace
 
 namespace {

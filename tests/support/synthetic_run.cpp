@@ -110,8 +110,10 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
       p.true_viewing_angle_deg = 60.0 * std::fmod(0.37 * i, 1.0);
       p.distance_bounds = {{"0", synthetic_bound(spec, d)},
                            {"target", 0.5 * synthetic_bound(spec, d)}};
-      for (int m = 0; m < 4; ++m)
-        p.visible_markers.push_back({m, side_px});
+      for (int m = 0; m < 4; ++m) {
+        const bool planted = spec.plant_nonfinite_detection && i == 1 && m == 2;
+        p.visible_markers.push_back({m, planted ? HUGE_VAL : side_px});
+      }
     }
     p.stage_times = {{"move", 0.5}, {"settle", 0.2}, {"capture", 0.03}, {"detect", 0.004}};
     for (const SyntheticSolver& s : spec.solvers)
@@ -131,6 +133,8 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
                                   x0 + side_px, y0 + side_px, x0,           y0 + side_px};
         for (int c = 0; c < 8; ++c)
           det.corners_px[c] = square[c] + spec.corner_noise_px * normal(rng);
+        if (spec.plant_nonfinite_detection && i == 0 && f == 0 && m == 1)
+          det.corners_px[3] = HUGE_VAL;
         det.contrast = 150;
         det.edge_fit_residual_px = 0.1 + 2.0 / side_px;
         frame.detections.push_back(det);

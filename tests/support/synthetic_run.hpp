@@ -59,6 +59,10 @@ struct SyntheticRunSpec {
   // false: write positions as a schema-1 writer would have (no viewing angle,
   // bounds or visible markers).
   bool record_physics = true;
+  // A detector bug: marker 1's detection in frame 0 of plan index 0 gets an
+  // infinite corner coordinate, and marker 2's visible side at plan index 1
+  // is infinite.
+  bool plant_nonfinite_detection = false;
   db::RunStatus status = db::RunStatus::kCompleted;  // kRunning: left running
   bool durable_commits = false;                      // the fixture does not need fsyncs
 };

@@ -216,6 +216,11 @@ struct RunStudy {
   std::vector<ClassCornerNoise> corner_noise;
   std::vector<MarkerSizeClass> marker_sizes;  // empty when visible markers were not recorded
   bool visible_markers_recorded = false;
+  // Left out of every detection figure because of a non-finite value (a
+  // detector or simulator bug): detections with a non-finite corner
+  // coordinate or edge-fit residual (not counted as detected), and visible
+  // markers (marker x position) with a non-finite projected side length.
+  std::size_t nonfinite_detections = 0, nonfinite_visible_markers = 0;
   bool distance_bounds_recorded = false;
   bool viewing_angles_recorded = false;
   std::vector<StageStudy> stages;
