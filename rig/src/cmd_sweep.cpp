@@ -62,6 +62,9 @@ class SignalWatch {
     struct sigaction action {};
     action.sa_handler = on_stop_signal;
     sigemptyset(&action.sa_mask);
+    // A system call the signal lands in (a Modbus read, a camera wait) is
+    // restarted instead of failing with EINTR as a link or capture fault.
+    action.sa_flags = SA_RESTART;
     sigaction(SIGINT, &action, &old_int_);
     sigaction(SIGTERM, &action, &old_term_);
     thread_ = std::thread([this] {
@@ -146,13 +149,33 @@ class LiveLink {
  public:
   explicit LiveLink(const TelemetryEndpoints& endpoints)
       : publisher(endpoints.publish),
-        server_(endpoints.control, control, [this] { return status(); }) {}
+        server_(endpoints.control, control, [this] { return status(); }),
+        signals_(control) {}
 
-  // The controller the control socket's `status` describes (null: none yet).
-  void attach(Controller* controller, std::int64_t run_id) {
+  // While the guard lives, the control socket's `status` describes
+  // `controller`; afterwards it repeats the controller's last status (the
+  // guard detaches on every path out, exceptions included).
+  class Attached {
+   public:
+    Attached(LiveLink& link, Controller& controller) : link_(link) {
+      std::lock_guard<std::mutex> lock(link_.mutex_);
+      link_.live_ = &controller;
+    }
+    ~Attached() {
+      std::lock_guard<std::mutex> lock(link_.mutex_);
+      link_.last_ = link_.live_->status();
+      link_.live_ = nullptr;
+    }
+    Attached(const Attached&) = delete;
+    Attached& operator=(const Attached&) = delete;
+
+   private:
+    LiveLink& link_;
+  };
+
+  void set_run(std::int64_t run_id) {
     std::lock_guard<std::mutex> lock(mutex_);
-    live_ = controller;
-    run_id_ = run_id;
+    last_ = {{"state", "starting"}, {"run_id", run_id}};
   }
   std::string control_endpoint() const { return server_.endpoint(); }
 
@@ -162,14 +185,14 @@ class LiveLink {
  private:
   nlohmann::json status() {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (!live_) return {{"state", "starting"}, {"run_id", run_id_}};
-    return live_->status();
+    return live_ ? live_->status() : last_;
   }
 
   std::mutex mutex_;
   Controller* live_ = nullptr;
-  std::int64_t run_id_ = 0;
-  ControlServer server_;  // last: its thread calls status() until it is destroyed
+  nlohmann::json last_ = {{"state", "starting"}};
+  ControlServer server_;  // its thread calls status() until it is destroyed
+  SignalWatch signals_;   // SIGINT/SIGTERM from here on: an abort request
 };
 
 // What drives a run once the run exists: the controller, progress, the
@@ -180,7 +203,7 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
               std::int64_t run_id, LiveLink& link, const std::string& again) {
   ControlState& control = link.control;
   TelemetryPublisher& publisher = link.publisher;
-  link.attach(nullptr, run_id);
+  link.set_run(run_id);
   std::cout << "rig sweep: run " << run_id << " in " << store.path() << ", " << plan.size()
             << " positions (" << plan.description() << "), telemetry " << publisher.endpoint()
             << ", control " << link.control_endpoint() << std::endl;
@@ -193,7 +216,6 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
   }
 
   Controller controller(config, plan, bench, camera, store, run_id, control, &publisher);
-  link.attach(&controller, run_id);
   // On a terminal: a progress bar with ETA redrawn on stderr, faults and
   // pauses as lines above it; otherwise one line per message on stdout.
   const bool terminal = is_terminal(STDERR_FILENO) && !args.no_progress;
@@ -203,10 +225,9 @@ int drive_run(const SweepArgs& args, const SweepConfig& config, const SweepPlan&
 
   RunOutcome outcome;
   {
-    SignalWatch signals(control);
+    const LiveLink::Attached attached(link, controller);
     outcome = controller.run();
   }
-  link.attach(nullptr, run_id);
   std::cout << "rig sweep: run " << run_id << " " << db::to_string(outcome.status)
             << (outcome.reason.empty() ? "" : ": " + outcome.reason) << "\n"
             << "  positions: " << outcome.positions_ok << " ok, " << outcome.positions_failed
@@ -292,28 +313,26 @@ int run_sweep(const SweepArgs& args) {
   store_options.record_store_time = true;
   db::Store store(database, store_options);
 
+  // Everything is checked before anything moves or is written: a resume's
+  // stored plan and files first, then the bench is homed, then the run is
+  // started or resumed.
   SweepPlan plan = config.plan;
-  std::int64_t run_id = 0;
+  std::optional<db::Run> resumed;
   if (args.resume_run > 0) {
-    db::Run run;
     try {
-      run = store.run(args.resume_run);
+      resumed = store.run(args.resume_run);
     } catch (const db::StoreError& e) {
       throw BadInput(std::string("--resume ") + std::to_string(args.resume_run) + ": " + e.what());
     }
     const nlohmann::json stored_config =
-        nlohmann::json::parse(run.description.config_json, nullptr, false);
+        nlohmann::json::parse(resumed->description.config_json, nullptr, false);
     if (stored_config.is_object() && stored_config.contains("replay_of"))
-      throw BadInput("--resume " + std::to_string(run.id) + ": run " + std::to_string(run.id) +
-                     " is a replay (of " + stored_config["replay_of"].dump() +
+      throw BadInput("--resume " + std::to_string(resumed->id) + ": run " +
+                     std::to_string(resumed->id) + " is a replay (of " +
+                     stored_config["replay_of"].dump() +
                      "); a replay is not resumed on the bench: replay the original run again "
                      "with --replay");
-    plan = plan_for_resume(run, config);
-    store.resume_run(run.id);
-    run_id = run.id;
-    store.record_event(run_id, "resume", "rig sweep --resume");
-  } else {
-    run_id = store.start_run(describe_run(config, plan));
+    plan = plan_for_resume(*resumed, config);
   }
 
   // Homing is needed once per power-up of the drive; a resumed run on a homed
@@ -321,6 +340,20 @@ int run_sweep(const SweepArgs& args) {
   if (config.home_first && !bench.status().homed) {
     bench.home();
     bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
+  }
+  if (link.control.abort_requested()) {
+    std::cerr << "rig sweep: " << link.control.abort_reason()
+              << " before the run started; nothing was recorded\n";
+    return kExitFailure;
+  }
+
+  std::int64_t run_id = 0;
+  if (resumed) {
+    store.resume_run(resumed->id);
+    run_id = resumed->id;
+    store.record_event(run_id, "resume", "rig sweep --resume");
+  } else {
+    run_id = store.start_run(describe_run(config, plan));
   }
 
   return drive_run(args, config, plan, bench, *camera, store, run_id, link,
@@ -345,7 +378,8 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
                   "Run database (SQLite); default: the sweep file's [database] path");
   cmd->add_option("--resume", args->resume_run,
                   "Continue run RUN of the database from its first missing position (the "
-                  "sweep file and the files it names must be those the run started with)")
+                  "sweep file and the files it names must be those the run started with; positions "
+                  "stored as failed are kept, not measured again)")
       ->check(CLI::PositiveNumber);
   cmd->add_option("--replay", args->replay_run,
                   "Measure the frames run RUN saved ([capture] save_frames) again, into a new "

@@ -1,5 +1,6 @@
 #include "rig/controller.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -77,8 +78,20 @@ struct Controller::Impl {
 
   std::function<void(const nlohmann::json&)> observer;
 
+  bool telemetry_failed = false;
+
+  // Telemetry never ends a sweep: a socket error is recorded once and the
+  // sweep goes on without it.
   void publish(const nlohmann::json& message) {
-    if (telemetry) telemetry->publish(message);
+    if (telemetry && !telemetry_failed) {
+      try {
+        telemetry->publish(message);
+      } catch (const TelemetryError& e) {
+        telemetry_failed = true;
+        store.record_event(run_id, "telemetry",
+                           std::string(e.what()) + "; telemetry off for the rest of the run");
+      }
+    }
     if (observer) observer(message);
   }
 
@@ -102,9 +115,12 @@ struct Controller::Impl {
              {"action", action}});
   }
 
+  double paused_s = 0;  // time spent paused in this session (not measuring)
+
   double eta_s() const {  // under mutex
     if (done_this_session == 0) return -1;
-    const double per_position = elapsed_s / static_cast<double>(done_this_session);
+    const double per_position =
+        std::max(0.0, elapsed_s - paused_s) / static_cast<double>(done_this_session);
     return per_position * static_cast<double>(static_cast<std::int64_t>(plan.size()) - stored);
   }
 
@@ -117,7 +133,12 @@ struct Controller::Impl {
                        control.paused_by_controller() ? "paused after a fault" : "pause requested",
                        index);
     set_state("paused");
+    const auto pause_start = Clock::now();
     const bool go_on = control.wait_while_paused();
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      paused_s += seconds_since(pause_start);
+    }
     if (!go_on) return false;
     store.record_event(run_id, "resume", "resumed", index);
     set_state("running");
@@ -160,6 +181,9 @@ struct Controller::Impl {
           fault("alarm", std::string("alarm persists after reset: ") + again.what(), "pause",
                 index);
           control.set_paused_by_controller(true);
+        } catch (const motion::BenchLinkError& e) {
+          // The move is retried next; a link that stays down ends there.
+          fault("link", std::string("resetting the alarm: ") + e.what(), "retry", index);
         }
       } catch (const motion::BenchLinkError& e) {
         ++link_failures;
@@ -245,16 +269,21 @@ struct Controller::Impl {
           throw PositionFailure{"camera", e.what()};
         }
         rec.stage_times.push_back({"capture", seconds_since(capture_start)});
-        const motion::XY after = bench.position();
-        const double moved = std::max(std::abs(after.x_mm - status.position.x_mm),
-                                      std::abs(after.y_mm - status.position.y_mm));
-        if (moved <= tolerance) break;
-        if (attempt >= config.faults.capture_retries)
-          throw PositionFailure{"settle", "the bench moved " + std::to_string(moved) +
-                                              " mm during the exposures (tolerance " +
-                                              std::to_string(tolerance) + " mm)"};
-        store.record_event(run_id, "settle", "bench moved during the exposures; frames taken again",
-                           index);
+        // The read-back again: the frames count only if the bench stayed put.
+        // A bench that cannot be read now cannot vouch for them either.
+        std::string unverified;
+        try {
+          const motion::XY after = bench.position();
+          const double moved = std::max(std::abs(after.x_mm - status.position.x_mm),
+                                        std::abs(after.y_mm - status.position.y_mm));
+          if (moved <= tolerance) break;
+          unverified = "the bench moved " + std::to_string(moved) +
+                       " mm during the exposures (tolerance " + std::to_string(tolerance) + " mm)";
+        } catch (const motion::BenchError& e) {
+          unverified = std::string("the read-back after the exposures failed: ") + e.what();
+        }
+        if (attempt >= config.faults.capture_retries) throw PositionFailure{"settle", unverified};
+        store.record_event(run_id, "settle", unverified + "; frames taken again", index);
         rec.stage_times.clear();
       }
 
@@ -313,10 +342,8 @@ struct Controller::Impl {
       std::lock_guard<std::mutex> lock(mutex);
       stored = static_cast<std::int64_t>(have.size());
     }
-    std::int64_t first_index = 0;
-    while (first_index < static_cast<std::int64_t>(plan.size()) &&
-           stored_already[static_cast<std::size_t>(first_index)])
-      ++first_index;
+    const std::int64_t first_index =
+        store.first_incomplete_position(run_id).value_or(static_cast<std::int64_t>(plan.size()));
     publish({{"type", "run_start"},
              {"run_id", run_id},
              {"database", store.path()},
@@ -386,7 +413,6 @@ struct Controller::Impl {
   }
 
   void finish(const RunEnd& end, RunOutcome& outcome) {
-    set_state("stopping");
     outcome.status = end.status;
     outcome.reason = end.reason;
     {
@@ -404,6 +430,7 @@ struct Controller::Impl {
       // Already failing on the database: the run stays "running" in the file,
       // which --resume accepts.
     }
+    set_state("stopping");
     publish({{"type", "run_stop"},
              {"run_id", run_id},
              {"status", db::to_string(outcome.status)},

@@ -69,7 +69,12 @@ RecordedRun RecordedRun::load(const db::Store& store, std::int64_t run_id) {
   RecordedRun r;
   r.database_ = store.path();
   r.run_ = store.run(run_id);
-  r.plan_ = SweepPlan::from_json(nlohmann::json::parse(r.run_.description.plan_json));
+  const nlohmann::json plan = nlohmann::json::parse(r.run_.description.plan_json, nullptr,
+                                                    /*allow_exceptions=*/false);
+  if (plan.is_discarded())
+    throw PlanError("run " + std::to_string(run_id) +
+                    ": its stored plan is not valid JSON; the database is damaged");
+  r.plan_ = SweepPlan::from_json(plan);
   r.positions_.resize(r.plan_.size());
   for (std::size_t i = 0; i < r.plan_.size(); ++i) {
     RecordedPosition& p = r.positions_[i];

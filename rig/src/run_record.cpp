@@ -77,8 +77,12 @@ SweepPlan plan_for_resume(const db::Run& run, const SweepConfig& config) {
   const std::string which = "run " + std::to_string(run.id);
   if (run.status == db::RunStatus::kCompleted)
     throw RunMismatch(which + " is completed; there is nothing to resume");
-  const db::RunDescription now =
-      describe_run(config, SweepPlan::from_json(nlohmann::json::parse(run.description.plan_json)));
+  const nlohmann::json plan_json =
+      nlohmann::json::parse(run.description.plan_json, nullptr, /*allow_exceptions=*/false);
+  if (plan_json.is_discarded())
+    throw PlanError(which + ": its stored plan is not valid JSON; the database is damaged");
+  SweepPlan plan = SweepPlan::from_json(plan_json);
+  const db::RunDescription now = describe_run(config, plan);
   const std::pair<const db::StoredFile*, const db::StoredFile*> files[] = {
       {&run.description.sweep_file, &now.sweep_file},
       {&run.description.camera_calibration, &now.camera_calibration},
@@ -93,7 +97,7 @@ SweepPlan plan_for_resume(const db::Run& run, const SweepConfig& config) {
                         sha.substr(0, 12) + "...); a resumed run must measure with the files " +
                         "it started with");
   }
-  return SweepPlan::from_json(nlohmann::json::parse(run.description.plan_json));
+  return plan;
 }
 
 }  // namespace rig

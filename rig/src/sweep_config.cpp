@@ -14,6 +14,7 @@
 
 #include "motion/bench_url.hpp"
 #include "motion/errors.hpp"
+#include "rig/telemetry.hpp"
 #include "sweep_file_section.hpp"
 
 namespace rig {
@@ -115,25 +116,18 @@ void check_camera_spec(Section& s, const fs::path& base_dir, std::string* spec) 
 
 // A ZeroMQ endpoint the telemetry may bind: tcp://HOST:PORT or ipc://PATH;
 // without allow_remote a TCP host must be loopback.
+// The endpoint checked by the rules the telemetry itself binds by
+// (rig/telemetry.hpp), reported as a sweep file error.
 void check_endpoint(Section& s, const std::string& key, const std::string& endpoint,
                     bool allow_remote) {
-  const std::string expected =
-      std::string("tcp://HOST:PORT (port 1..65535) or ipc://PATH") +
-      (allow_remote ? ""
-                    : " with a loopback host (127.x.x.x or localhost) unless "
-                      "telemetry.allow_remote = true");
-  if (endpoint.rfind("ipc://", 0) == 0 && endpoint.size() > 6) return;
-  if (endpoint.rfind("tcp://", 0) != 0) s.fail(key, s.take(key), expected);
-  const std::string rest = endpoint.substr(6);
-  const auto colon = rest.rfind(':');
-  if (colon == std::string::npos || colon == 0) s.fail(key, s.take(key), expected);
-  const std::string host = rest.substr(0, colon);
-  const std::string port = rest.substr(colon + 1);
-  char* end = nullptr;
-  const long p = std::strtol(port.c_str(), &end, 10);
-  if (port.empty() || *end != '\0' || p < 1 || p > 65535) s.fail(key, s.take(key), expected);
-  const bool loopback = host.rfind("127.", 0) == 0 || host == "localhost" || host == "[::1]";
-  if (!allow_remote && !loopback) s.fail(key, s.take(key), expected);
+  try {
+    validate_endpoint(endpoint, allow_remote, "endpoint");
+  } catch (const EndpointError& e) {
+    s.fail(key, s.take(key),
+           "an endpoint tcp://HOST:PORT, ipc://PATH or inproc://NAME on this machine unless "
+           "telemetry.allow_remote = true",
+           e.what());
+  }
 }
 
 // The geometry from a rig file or from inline [rig.camera_mount] / [rig.target].

@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <thread>
 
 #include "db/store.hpp"
 #include "motion/errors.hpp"
@@ -46,7 +47,15 @@ class ScriptedBench : public motion::Bench {
     settled_ = at_;
     return s;
   }
-  motion::XY position() override { return {settled_.x_mm + drift_mm, settled_.y_mm}; }
+  std::deque<std::function<void()>> on_position;  // run (and popped) at each position()
+  motion::XY position() override {
+    if (!on_position.empty()) {
+      auto fault = on_position.front();
+      on_position.pop_front();
+      fault();
+    }
+    return {settled_.x_mm + drift_mm, settled_.y_mm};
+  }
   motion::BenchStatus status() override { return wait_settled(0ms); }
   void stop() override {}
   void reset_alarm() override {}
@@ -231,6 +240,58 @@ TEST_F(ControllerTest, AResumeRefusesAFileThatChangedSinceTheRunStarted) {
         std::string::npos)
         << e.what();
   }
+}
+
+}  // namespace
+
+namespace {
+
+TEST_F(ControllerTest, ABenchAlarmEndsTheRunAbortedWhenThePolicySaysAbort) {
+  config_.faults.on_alarm = rig::AlarmAction::kAbort;
+  bench_.on_settle.push_back(
+      [] { throw motion::BenchFault("bench: alarm 2", 2, "following error"); });
+  const rig::RunOutcome outcome = sweep();
+  EXPECT_EQ(outcome.status, db::RunStatus::kAborted);
+  EXPECT_NE(outcome.reason.find("bench alarm"), std::string::npos);
+  EXPECT_EQ(outcome.stored_total, 0);
+  EXPECT_EQ(store_->events(run_).front().kind, "alarm");
+}
+
+TEST_F(ControllerTest, ABenchAlarmPausesUntilResumedThenRetriesThePosition) {
+  config_.faults.on_alarm = rig::AlarmAction::kPause;
+  bench_.on_settle.push_back(
+      [] { throw motion::BenchFault("bench: alarm 2", 2, "following error"); });
+  // The operator: resumes once the controller is holding.
+  std::thread operator_thread([this] {
+    while (!control_.paused())
+      std::this_thread::sleep_for(1ms);
+    control_.request_resume();
+  });
+  const rig::RunOutcome outcome = sweep();
+  operator_thread.join();
+  EXPECT_EQ(outcome.status, db::RunStatus::kCompleted);
+  EXPECT_EQ(outcome.positions_failed, 0);
+  EXPECT_EQ(bench_.settles, static_cast<int>(config_.plan.size()) + 1);  // position 0 twice
+  std::vector<std::string> kinds;
+  for (const auto& e : store_->events(run_))
+    kinds.push_back(e.kind);
+  EXPECT_EQ(kinds, (std::vector<std::string>{"alarm", "pause", "resume"}));
+}
+
+TEST_F(ControllerTest, AReadBackThatFailsAfterTheExposuresHasTheFramesRetaken) {
+  bench_.on_position.push_back([] { throw motion::BenchLinkError("bench: link lost"); });
+  const rig::RunOutcome outcome = sweep();
+  EXPECT_EQ(outcome.status, db::RunStatus::kCompleted);
+  EXPECT_EQ(outcome.positions_failed, 0);
+  EXPECT_EQ(camera_.grabs, 2 * (static_cast<int>(config_.plan.size()) + 1));
+}
+
+TEST_F(ControllerTest, ADatabaseThatRefusesAPositionFailsTheRunAndTheErrorReachesTheCaller) {
+  // Someone ends the run behind the controller's back: the next append is refused.
+  bench_.on_settle.push_back(
+      [this] { store_->finish_run(run_, db::RunStatus::kAborted, "ended elsewhere"); });
+  EXPECT_THROW(sweep(), db::StoreError);
+  EXPECT_TRUE(store_->completed_position_indices(run_).empty());
 }
 
 }  // namespace

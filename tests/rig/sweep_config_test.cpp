@@ -428,9 +428,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "from telemetry.publish (tcp://127.0.0.1:5556)"},
         BadCase{"remote_telemetry", "publish = \"tcp://127.0.0.1:5556\"",
                 "publish = \"tcp://0.0.0.0:5556\"",
-                "telemetry.publish = \"tcp://0.0.0.0:5556\": expected tcp://HOST:PORT (port "
-                "1..65535) or ipc://PATH with a loopback host (127.x.x.x or localhost) unless "
-                "telemetry.allow_remote = true"},
+                "telemetry.publish = \"tcp://0.0.0.0:5556\": endpoint \"tcp://0.0.0.0:5556\" "
+                "binds beyond this machine (host \"0.0.0.0\")",
+                true},
+        BadCase{"not_really_loopback_telemetry", "publish = \"tcp://127.0.0.1:5556\"",
+                "publish = \"tcp://127.evil.example:5556\"",
+                "telemetry.publish = \"tcp://127.evil.example:5556\": endpoint "
+                "\"tcp://127.evil.example:5556\" binds beyond this machine",
+                true},
         BadCase{"bad_on_alarm", "on_alarm = \"pause\"", "on_alarm = \"ignore\"",
                 "faults.on_alarm = \"ignore\": expected \"pause\" or \"abort\""},
         BadCase{"unknown_kind", "kind = \"grid\"", "kind = \"spiral\"",

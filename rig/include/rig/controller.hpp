@@ -59,7 +59,8 @@ struct RunOutcome {
 class Controller {
  public:
   // plan: the run's plan (for a resumed run, the stored one). The run must
-  // exist in `store` and be running. telemetry may be null.
+  // exist in `store` and be running. telemetry may be null. Every argument is
+  // kept by reference and must outlive the Controller.
   Controller(const SweepConfig& config, const SweepPlan& plan, motion::Bench& bench,
              vision::FrameSource& camera, db::Store& store, std::int64_t run_id,
              ControlState& control, TelemetryPublisher* telemetry);

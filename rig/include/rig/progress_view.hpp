@@ -4,16 +4,16 @@
 //
 // Messages (published by the controller, one JSON object each):
 //   run_start {run_id, database, plan_size, first_index, resumed, solvers[], frames_per_position,
-//              sweep_file, started_at}
+//              sweep_file, plan (its description)}
 //   position  {run_id, plan_index, completed, plan_size, status "ok"|"failed", failure_reason,
 //              commanded{x_mm,y_mm}, measured{x_mm,y_mm}, true_distance_m, markers_detected,
 //              estimates[{solver, scope "0"(marker id)|"target", distance_m, distance_error_m,
 //              reprojection_error_px, generalization_error_px|null, converged}],
 //              stage_times_s{...}, elapsed_s}
 //   fault     {run_id, plan_index, kind, message, action}
-//   state     {run_id, state "running"|"paused"}
+//   state     {run_id, state "running"|"paused"|"stopping"}
 //   run_stop  {run_id, status "completed"|"aborted"|"failed", reason, positions_ok,
-//              positions_failed, plan_size, elapsed_s}
+//              positions_failed, stored, plan_size, elapsed_s}
 // Missing or mistyped fields are shown as "-", never thrown on: a monitor
 // must survive a newer or older controller.
 //

@@ -34,7 +34,8 @@ nlohmann::json library_versions();
 // For `rig sweep --resume RUN`: the run's stored plan, after checking that
 // every file the config read has the SHA-256 the run stored (a resumed run
 // must measure with what it started with). Throws RunMismatch naming the
-// file that changed, or the run's status if it is completed.
+// file that changed, or the run's status if it is completed; PlanError if the
+// stored plan is damaged; SweepConfigError if a file cannot be read.
 SweepPlan plan_for_resume(const db::Run& run, const SweepConfig& config);
 
 }  // namespace rig

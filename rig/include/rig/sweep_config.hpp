@@ -108,7 +108,9 @@ struct FaultPolicy {
   // Bench alarm: stop, record, then pause (wait for `rig ctl resume`) or abort.
   AlarmAction on_alarm = AlarmAction::kPause;
   // Re-triggers after a camera timeout or an incomplete frame before the
-  // position is marked failed.
+  // position is marked failed; also how many frames stamped before the bench
+  // settled are discarded, and how many times the frames are taken again
+  // when the read-back moved during the exposures, before the position fails.
   int capture_retries = 2;
   // How long one grab waits for its frame.
   std::chrono::milliseconds grab_timeout{2000};
