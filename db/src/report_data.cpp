@@ -8,6 +8,7 @@
 #include "db/report.hpp"
 #include "db/store.hpp"
 #include "sqlite.hpp"
+#include "store_impl.hpp"
 
 namespace db::report {
 
@@ -45,29 +46,82 @@ bool is_skipped(const std::string& termination) {
   return termination == "skipped" || termination == "not_applicable";
 }
 
-Run pick_run(const Store& store, const std::string& database, std::optional<std::int64_t> run_id) {
-  const std::vector<Run> runs = store.runs();
+// The run to report, chosen inside the read transaction: its id and status
+// by direct queries (no run's stored files are read to choose one).
+std::int64_t pick_run(sqlite::Connection& connection, const std::string& database,
+                      std::optional<std::int64_t> run_id) {
   if (run_id) {
-    for (const Run& r : runs) {
-      if (r.id != *run_id) continue;
-      if (r.status == RunStatus::kRunning) {
+    sqlite::Statement status(connection, "SELECT status FROM runs WHERE id = ?1");
+    status.bind(1, *run_id);
+    if (status.step()) {
+      if (status.get_text(0) == to_string(RunStatus::kRunning)) {
         throw ReportInputError(database + ": run " + std::to_string(*run_id) +
                                " is still running; expected a completed, aborted or failed run");
       }
-      return r;
+      return *run_id;
     }
     std::string known;
-    for (const Run& r : runs)
-      known += (known.empty() ? "" : ", ") + std::to_string(r.id);
+    sqlite::Statement ids(connection, "SELECT id FROM runs ORDER BY id");
+    while (ids.step())
+      known += (known.empty() ? "" : ", ") + std::to_string(ids.get_int64(0));
     throw ReportInputError(database + ": no run " + std::to_string(*run_id) +
                            " (runs: " + (known.empty() ? "none" : known) + ")");
   }
-  for (auto it = runs.rbegin(); it != runs.rend(); ++it) {
-    if (it->status == RunStatus::kCompleted) return *it;
-  }
-  throw ReportInputError(database + ": no completed run (" + std::to_string(runs.size()) +
+  sqlite::Statement latest(connection,
+                           "SELECT id FROM runs WHERE status = ?1 ORDER BY id DESC LIMIT 1");
+  latest.bind(1, to_string(RunStatus::kCompleted));
+  if (latest.step()) return latest.get_int64(0);
+  sqlite::Statement count(connection, "SELECT count(*) FROM runs");
+  count.step();
+  throw ReportInputError(database + ": no completed run (" + std::to_string(count.get_int64(0)) +
                          " run(s), none completed); finish a sweep first or name one with --run");
 }
+
+// A deferred read transaction on a read-only connection: its snapshot is
+// taken at the first read and holds until commit (or destruction).
+class ReadTransaction {
+ public:
+  explicit ReadTransaction(sqlite::Connection& connection) : connection_(connection) {
+    connection_.exec("BEGIN");
+  }
+  ~ReadTransaction() {
+    if (open_) sqlite3_exec(connection_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  ReadTransaction(const ReadTransaction&) = delete;
+  ReadTransaction& operator=(const ReadTransaction&) = delete;
+  void commit() {
+    connection_.exec("COMMIT");
+    open_ = false;
+  }
+
+ private:
+  sqlite::Connection& connection_;
+  bool open_ = true;
+};
+
+// The slot in RunData::positions of a plan index met by a pass; every pass
+// reads the snapshot the slots came from, so a miss means the file is
+// inconsistent (a row of frames without its position).
+class Slots {
+ public:
+  Slots(const std::string& database, std::int64_t run_id) : database_(database), run_id_(run_id) {}
+  void add(std::int64_t plan_index, std::uint32_t slot) { slot_of_.emplace(plan_index, slot); }
+  std::uint32_t at(std::int64_t plan_index, const char* table) const {
+    const auto it = slot_of_.find(plan_index);
+    if (it == slot_of_.end()) {
+      throw StoreError(database_ + ": run " + std::to_string(run_id_) + " has " + table +
+                       " at plan index " + std::to_string(plan_index) +
+                       " but no such position; expected every row to belong to a stored "
+                       "position (is the file damaged?)");
+    }
+    return it->second;
+  }
+
+ private:
+  std::string database_;
+  std::int64_t run_id_;
+  std::unordered_map<std::int64_t, std::uint32_t> slot_of_;
+};
 
 // Per position: the corners of each marker over its frames.
 struct CornerSeries {
@@ -120,26 +174,72 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
     // the user must fix, not a failure of this program.
     throw ReportInputError(e.what());
   }
-  data.run = pick_run(*store, database, run_id);
-  const std::int64_t id = data.run.id;
-  std::unordered_map<std::int64_t, std::uint32_t> slot_of;
-  for (PositionRecord& p : store->positions(id)) {
-    slot_of.emplace(p.plan_index, static_cast<std::uint32_t>(data.positions.size()));
-    PositionData pd;
-    pd.record = std::move(p);
-    data.positions.push_back(std::move(pd));
-  }
-  data.events = store->events(id);
-  store.reset();
 
+  // One snapshot: every read of the run's rows is made in one read
+  // transaction of this connection, so a sweep resumed or appending while
+  // the report reads cannot make the passes disagree. The run's description
+  // and its position records are read through the Store (its own
+  // connection) after the snapshot began: positions are append-only and
+  // immutable once written, so the Store sees a superset of the snapshot's
+  // positions and keeping those of the snapshot gives exactly the snapshot's
+  // records; the run's mutable columns (status, reason, end) are taken from
+  // the snapshot.
   sqlite::Connection connection(database, SQLITE_OPEN_READONLY);
   connection.exec("PRAGMA query_only = ON");
+  ReadTransaction transaction(connection);
+  const std::int64_t id = pick_run(connection, database, run_id);
+  {
+    sqlite::Statement state(connection,
+                            "SELECT status, status_reason, ended_at FROM runs WHERE id = ?1");
+    state.bind(1, id);
+    state.step();
+    data.run = store->run(id);
+    data.run.status = run_status_from_text(database, state.get_text(0));
+    data.run.status_reason = state.get_text(1);
+    data.run.ended_at = state.get_optional_text(2);
+  }
+  Slots slots(database, id);
+  {
+    std::vector<std::int64_t> snapshot_indices;
+    sqlite::Statement indices(connection,
+                              "SELECT plan_index FROM positions WHERE run_id = ?1 "
+                              "ORDER BY plan_index");
+    indices.bind(1, id);
+    while (indices.step())
+      snapshot_indices.push_back(indices.get_int64(0));
+    std::size_t next = 0;
+    for (PositionRecord& p : store->positions(id)) {
+      if (next == snapshot_indices.size() || p.plan_index != snapshot_indices[next]) continue;
+      ++next;
+      slots.add(p.plan_index, static_cast<std::uint32_t>(data.positions.size()));
+      PositionData pd;
+      pd.record = std::move(p);
+      data.positions.push_back(std::move(pd));
+    }
+    if (next != snapshot_indices.size()) {
+      throw StoreError(database + ": run " + std::to_string(id) + ": position at plan index " +
+                       std::to_string(snapshot_indices[next]) +
+                       " disappeared while the report read it; expected positions to be "
+                       "append-only");
+    }
+  }
+  store.reset();
+  {
+    sqlite::Statement events(connection,
+                             "SELECT at, plan_index, kind, message FROM run_events "
+                             "WHERE run_id = ?1 ORDER BY id");
+    events.bind(1, id);
+    while (events.step()) {
+      data.events.push_back(RunEvent{events.get_text(0), events.get_optional_int64(1),
+                                     events.get_text(2), events.get_text(3)});
+    }
+  }
 
   {
     sqlite::Statement frames(connection, kFramesQuery);
     frames.bind(1, id);
     while (frames.step())
-      data.positions[slot_of.at(frames.get_int64(0))].frames =
+      data.positions[slots.at(frames.get_int64(0), "frames")].frames =
           static_cast<std::size_t>(frames.get_int64(1));
   }
 
@@ -173,7 +273,7 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
       const std::int64_t frame = select.get_int64(1);
       if (plan != current_plan || frame != current_frame) {
         flush_frame();
-        if (plan != current_plan) current_slot = slot_of.at(plan);
+        if (plan != current_plan) current_slot = slots.at(plan, "estimates");
         current_plan = plan;
         current_frame = frame;
       }
@@ -235,7 +335,8 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
     while (select.step()) {
       const std::int64_t plan = select.get_int64(0);
       if (plan != current_plan) {
-        if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
+        if (current_plan >= 0)
+          flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
         current_plan = plan;
       }
       std::array<double, 8> c;
@@ -253,8 +354,10 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
       s.corners.push_back(c);
       s.edge.add(edge);
     }
-    if (current_plan >= 0) flush_markers(series, data.positions[slot_of.at(current_plan)]);
+    if (current_plan >= 0)
+      flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
   }
+  transaction.commit();
   return data;
 }
 
