@@ -17,27 +17,6 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// RMS pixel distance between the detected corners of `markers` and their
-// projection through T_cam_target; nullopt when a corner falls behind the camera.
-std::optional<double> generalization_error_px(const vision::Camera& camera,
-                                              const vision::Target& target,
-                                              const std::vector<const vision::Detection*>& markers,
-                                              const vision::Pose& T_cam_target) {
-  double sum = 0;
-  int n = 0;
-  for (const auto* d : markers) {
-    const auto corners = target.corners_m(d->id);
-    for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d p = T_cam_target.R * corners[k] + T_cam_target.t;
-      if (!(p.z() > 0)) return std::nullopt;
-      sum += (camera.project(p) - d->corners_px[k]).squaredNorm();
-      ++n;
-    }
-  }
-  if (n == 0) return std::nullopt;
-  return std::sqrt(sum / n);
-}
-
 }  // namespace
 
 FrameMeasurer::FrameMeasurer(vision::Camera camera, vision::Target target,
@@ -71,6 +50,32 @@ FrameMeasurement FrameMeasurer::measure(const cv::Mat& image) const {
       others.push_back(&d);
   }
 
+  // Generalization error (paper §3.2): the other markers' detected corners
+  // against their projection through the pose marker's pose.
+  std::optional<vision::Correspondences> other_corners;
+  if (!others.empty()) {
+    std::vector<Eigen::Vector3d> object_points;
+    std::vector<Eigen::Vector2d> image_points;
+    for (const auto* d : others) {
+      const auto corners = target_.corners_m(d->id);
+      for (int k = 0; k < 4; ++k) {
+        object_points.push_back(corners[k]);
+        image_points.push_back(d->corners_px[k]);
+      }
+    }
+    try {
+      other_corners = vision::make_correspondences(camera_, object_points, image_points);
+    } catch (const vision::InputError&) {
+      // Corners outside the lens model's invertible region: no generalization error.
+    }
+  }
+  auto generalization_error_px = [&](const vision::Pose& T_cam_target) -> std::optional<double> {
+    if (!other_corners) return std::nullopt;
+    const double rms = vision::reprojection_rms_px(*other_corners, T_cam_target);
+    if (!std::isfinite(rms)) return std::nullopt;  // a corner on or behind the camera
+    return rms;
+  };
+
   auto solve_scope = [&](const std::string& scope,
                          const std::vector<const vision::Detection*>& markers, bool generalize) {
     std::vector<Eigen::Vector3d> object_points;
@@ -94,8 +99,7 @@ FrameMeasurement FrameMeasurer::measure(const cv::Mat& image) const {
       ScopeEstimate s{scope, solver->solve(c), std::nullopt};
       m.solve_s[solver->name()] += seconds_since(start);
       if (generalize && s.estimate.converged)
-        s.generalization_error_px =
-            generalization_error_px(camera_, target_, others, s.estimate.T_cam_target);
+        s.generalization_error_px = generalization_error_px(s.estimate.T_cam_target);
       m.estimates.push_back(std::move(s));
     }
   };
