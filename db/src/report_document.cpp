@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "svg_detail.hpp"
+
 namespace db::report {
 
 void Section::paragraph(std::string text) {
@@ -44,10 +46,9 @@ std::string num(double value, int digits) {
 }
 
 std::string colour_of(std::size_t index) {
-  // Okabe-Ito (colour-blind safe), then black and grey for solvers 9-10.
-  static const char* const kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00",
-                                         "#56B4E9", "#F0E442", "#000000", "#999999", "#882255"};
-  return kPalette[index % (sizeof kPalette / sizeof kPalette[0])];
+  // The figures' own palette (Okabe-Ito), so that a solver drawn with an
+  // explicit colour looks like a series coloured by the SVG library.
+  return svg::detail::kPalette[index % static_cast<std::size_t>(svg::detail::kPaletteSize)];
 }
 
 namespace {

@@ -7,7 +7,9 @@
 #include <sstream>
 
 #include "db/report.hpp"
+#include "report_document.hpp"
 #include "store_fixture.hpp"
+#include "svg_detail.hpp"
 #include "synthetic_run.hpp"
 
 namespace {
@@ -109,6 +111,16 @@ TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
   }
   EXPECT_NE(slurp(files.html).find("Against the baseline"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir_.file("out/comparison.csv")));
+}
+
+// A solver's colour in the report is the SVG library's palette colour of the
+// same index, so one solver is not drawn in two colours on one page.
+TEST(ReportColours, AreTheFiguresPalette) {
+  for (int i = 0; i < 2 * db::svg::detail::kPaletteSize; ++i) {
+    EXPECT_EQ(db::report::colour_of(static_cast<std::size_t>(i)),
+              db::svg::detail::kPalette[i % db::svg::detail::kPaletteSize])
+        << i;
+  }
 }
 
 }  // namespace
