@@ -71,7 +71,7 @@ void print_text(const std::string& image, const FrameMeasurement& m) {
                 d.quality.bits_corrected, d.quality.edge_fit_residual_px);
   }
   for (const auto& error : m.scope_errors)
-    std::printf("  no estimate: %s\n", error.c_str());
+    std::printf("  no estimate: %s: %s\n", error.scope.c_str(), error.message.c_str());
   std::string scope;
   for (const auto& s : m.estimates) {
     if (s.scope != scope) {
@@ -131,11 +131,8 @@ bool detect_one(const std::string& path, const FrameMeasurer& measurer, bool jso
                         {"estimates", nlohmann::json::array()}};
   for (const auto& d : m.detections)
     out["detections"].push_back(detection_to_json(d));
-  for (const auto& scope_error : m.scope_errors) {
-    const std::string scope = scope_error.substr(0, scope_error.find(':'));
-    out["estimates"].push_back(
-        {{"scope", scope_json(scope)}, {"error", scope_error.substr(scope.size() + 2)}});
-  }
+  for (const auto& error : m.scope_errors)
+    out["estimates"].push_back({{"scope", scope_json(error.scope)}, {"error", error.message}});
   for (const auto& s : m.estimates) {
     nlohmann::json j = estimate_to_json(s.estimate);
     j["scope"] = scope_json(s.scope);

@@ -298,6 +298,13 @@ struct Controller::Impl {
       std::map<std::string, double> solve_s;
       for (std::size_t k = 0; k < frames.size(); ++k) {
         const FrameMeasurement m = measurer.measure(frames[k].image);
+        // Detected corners no solver can take (e.g. outside the lens model's
+        // invertible region): the scope has no estimates; say why.
+        for (const auto& error : m.scope_errors)
+          store.record_event(run_id, "detect",
+                             "frame " + std::to_string(k) + ", scope " + error.scope +
+                                 ": no estimates: " + error.message,
+                             index);
         detect_s += m.detect_s;
         for (const auto& [name, s] : m.solve_s)
           solve_s[name] += s;

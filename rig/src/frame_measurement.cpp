@@ -91,7 +91,7 @@ FrameMeasurement FrameMeasurer::measure(const cv::Mat& image) const {
     try {
       c = vision::make_correspondences(camera_, object_points, image_points);
     } catch (const vision::InputError& e) {
-      m.scope_errors.push_back(scope + ": " + e.what());
+      m.scope_errors.push_back({scope, e.what()});
       return;
     }
     for (const auto& solver : solvers_) {

@@ -39,7 +39,11 @@ struct FrameMeasurement {
   std::vector<vision::Detection> detections;  // as the detector returned them
   std::vector<ScopeEstimate> estimates;       // per scope, every solver in registry order
   // Why a scope has no estimates (correspondences no solver can take); empty otherwise.
-  std::vector<std::string> scope_errors;
+  struct ScopeError {
+    std::string scope;    // as ScopeEstimate::scope
+    std::string message;  // vision::InputError's, naming the point and what was expected
+  };
+  std::vector<ScopeError> scope_errors;
   double detect_s = 0;                    // detector wall time, seconds
   std::map<std::string, double> solve_s;  // per solver, both scopes, seconds
 };
