@@ -133,8 +133,11 @@ struct VisibleMarker {
 };
 
 // Something that happened to a run besides its positions: a fault, a pause,
-// a resume. Kinds written by rig: "alarm", "link", "camera", "signal",
-// "pause", "resume", "abort", "start", "config".
+// a resume. Kinds written by rig: "alarm", "link", "camera", "settle"
+// (faults of the bench, its link, the camera, the settling), "detect"
+// (corners no solver could take), "telemetry" (the socket failed; the sweep
+// went on), "pause", "resume", "start" (a replay began). How a run ended is
+// its status and reason, not an event.
 struct RunEvent {
   std::string at;                          // UTC, ISO 8601 with milliseconds, set by the store
   std::optional<std::int64_t> plan_index;  // the position it happened at, if any
