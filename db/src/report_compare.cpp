@@ -135,6 +135,11 @@ void compare_classes(std::vector<ComparedFigure>& out, const SolverStudy& c, con
 
 }  // namespace
 
+bool regressed(const std::vector<ComparedFigure>& comparison) {
+  return std::any_of(comparison.begin(), comparison.end(),
+                     [](const ComparedFigure& f) { return f.worse; });
+}
+
 bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline) {
   return candidate.run.description.plan_json == baseline.run.description.plan_json;
 }

@@ -285,7 +285,6 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
 
       EstimateSample s;
       s.position = current_slot;
-      s.frame = static_cast<std::uint32_t>(frame);
       s.distance_m = select.get_double(13);
       s.reprojection_px = select.get_double(14);
       if (!select.is_null(15)) s.generalization_px = select.get_double(15);

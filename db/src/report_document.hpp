@@ -4,6 +4,8 @@
 // (report_tables.cpp, report_figures.cpp) and written three ways: HTML
 // (report_html.cpp), JSON (report_json.cpp) and CSV (report_csv.cpp), so
 // that the three outputs cannot disagree.
+#include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -52,6 +54,13 @@ void add_paper_figures(const ReportInput& input, const std::string& scope, Secti
 void add_beyond_tables(const ReportInput& input, Section& section);
 void add_beyond_figures(const ReportInput& input, Section& section);
 void add_comparison(const ReportInput& input, Section& section);
+
+// k of n as a fraction in [0, 1] (detection, failure, ambiguity and flip
+// rates); NaN when n is 0.
+inline double fraction(std::size_t k, std::size_t n) {
+  return n > 0 ? static_cast<double>(k) / static_cast<double>(n)
+               : std::numeric_limits<double>::quiet_NaN();
+}
 
 // Number as text for tables and CSV: 6 significant digits, "n/a" for NaN.
 std::string num(double value, int digits = 6);

@@ -158,10 +158,6 @@ svg::Figure residual_figure(const ReportInput& in, const std::string& scope) {
   return f;
 }
 
-double fraction(std::size_t k, std::size_t n) {
-  return n > 0 ? static_cast<double>(k) / static_cast<double>(n) : kNaN;
-}
-
 }  // namespace
 
 void add_paper_figures(const ReportInput& in, const std::string& scope, Section& sec) {

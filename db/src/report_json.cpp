@@ -158,9 +158,7 @@ std::string render_json(const Document& document, const ReportInput& in) {
             {"study", to_json(in.study)}};
   if (in.baseline) root["baseline"] = to_json(*in.baseline);
   json comparison = json::array();
-  bool regressed = false;
   for (const ComparedFigure& f : in.comparison) {
-    regressed |= f.worse;
     comparison.push_back({{"solver", f.solver},
                           {"scope", f.scope},
                           {"figure", f.figure},
@@ -174,7 +172,7 @@ std::string render_json(const Document& document, const ReportInput& in) {
                           {"better", f.better}});
   }
   root["comparison"] = comparison;
-  root["regressed"] = regressed;
+  root["regressed"] = regressed(in.comparison);
   json figures = json::array();
   json tables = json::array();
   for (const Section& section : document.sections) {

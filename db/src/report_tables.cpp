@@ -17,9 +17,6 @@ html::Cell number(double v, const std::string& css = "num") {
 html::Cell count(std::size_t n) {
   return {std::to_string(n), "num", ""};
 }
-double rate(std::size_t k, std::size_t n) {
-  return n > 0 ? static_cast<double>(k) / static_cast<double>(n) : kNaN;
-}
 
 // Rows of one table for every solver of the scope: ours, the baseline's
 // (when there is one) and the paper's (pose-marker scope, the paper's solvers).
@@ -217,7 +214,7 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
           reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
         t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->estimates),
                           count(s->skipped), count(s->failed),
-                          number(rate(s->failed, s->estimates - s->skipped)),
+                          number(fraction(s->failed, s->estimates - s->skipped)),
                           text(reasons.empty() ? "-" : reasons)});
       }
     }
@@ -237,10 +234,10 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
     for (const SolverStudy& c : st.solvers) {
       if (c.ambiguity_checked == 0 && c.flip_checked == 0) continue;
       for (const auto& [s, source] : with_baseline(in, c)) {
-        t.rows.push_back({text(s->solver), text(s->scope), text(source),
-                          count(s->ambiguity_checked), count(s->ambiguous),
-                          number(rate(s->ambiguous, s->ambiguity_checked)), count(s->flip_checked),
-                          count(s->flips), number(rate(s->flips, s->flip_checked))});
+        t.rows.push_back(
+            {text(s->solver), text(s->scope), text(source), count(s->ambiguity_checked),
+             count(s->ambiguous), number(fraction(s->ambiguous, s->ambiguity_checked)),
+             count(s->flip_checked), count(s->flips), number(fraction(s->flips, s->flip_checked))});
       }
     }
     sec.table(std::move(t));
@@ -271,7 +268,7 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
                   {}};
     for (const MarkerSizeClass& m : st.marker_sizes) {
       t.rows.push_back({text(num(m.lower_px, 4) + "-" + num(m.upper_px, 4)), count(m.expected),
-                        count(m.detected), number(rate(m.detected, m.expected)),
+                        count(m.detected), number(fraction(m.detected, m.expected)),
                         number(m.edge_fit_residual_px.mean), number(m.corner_jitter_px)});
     }
     sec.table(std::move(t));

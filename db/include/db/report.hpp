@@ -265,6 +265,11 @@ bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline);
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
                                          double k);
 
+// True when some counted figure of a comparison got significantly worse
+// (ComparedFigure::worse): the verdict of Report::regressed and of
+// report.json's "regressed".
+bool regressed(const std::vector<ComparedFigure>& comparison);
+
 // The paper's own values for a solver (DESIGN.md "Paper facts", Tables 2-6),
 // for "analytic", "hybrid_oi", "ekf", "hybrid_ekf"; nullopt for others.
 struct PaperValues {
