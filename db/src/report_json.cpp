@@ -168,6 +168,8 @@ std::string render_json(const Document& document, const ReportInput& in) {
                           {"standard_error", f.difference.standard_error},
                           {"z", f.difference.z},
                           {"significant", f.difference.significant},
+                          {"counted", f.counted},
+                          {"regression_k", f.regression_k},
                           {"worse", f.worse},
                           {"better", f.better}});
   }

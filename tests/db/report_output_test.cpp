@@ -2,6 +2,7 @@
 // thing, and hold every figure and table.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -111,6 +112,38 @@ TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
   }
   EXPECT_NE(slurp(files.html).find("Against the baseline"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir_.file("out/comparison.csv")));
+}
+
+// The verdict column of the comparison table follows from each JSON entry:
+// counted figures beyond regression_k are worse or better by the sign of the
+// difference, others beyond k are "changed".
+TEST_F(ReportOutput, ComparisonVerdictsFollowFromTheJson) {
+  const db::Report report(dir_.file("run.db"), db::ReportOptions{},
+                          db::RunReference::parse(dir_.file("baseline.db")));
+  const db::ReportFiles files = report.write(dir_.file("out"));
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json* table = nullptr;
+  for (const auto& t : json["tables"])
+    if (t["id"] == "comparison") table = &t;
+  ASSERT_NE(table, nullptr);
+  const auto& entries = json["comparison"];
+  ASSERT_EQ((*table)["rows"].size(), entries.size());
+  ASSERT_FALSE(entries.empty());
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const auto& e = entries[i];
+    ASSERT_TRUE(e.contains("counted") && e.contains("regression_k")) << i;
+    if (e["z"].is_null()) continue;  // +-inf: JSON has no infinity
+    const double z = e["z"], k = e["regression_k"], d = e["difference"];
+    const bool counted = e["counted"], beyond = std::fabs(z) > k;
+    const std::string verdict = (*table)["rows"][i].back();
+    const std::string expected =
+        counted && beyond && d > 0   ? "worse"
+        : counted && beyond && d < 0 ? "better"
+        : e["significant"].get<bool>()
+            ? (counted ? "changed (below the family-wise threshold)" : "changed")
+            : "no significant change";
+    EXPECT_EQ(verdict, expected) << e["figure"];
+  }
 }
 
 // A solver's colour in the report is the SVG library's palette colour of the
