@@ -250,9 +250,10 @@ void add_rate_figures(const ReportInput& in, Section& sec) {
              "", false, 0.0, std::nullopt};
       f.caption =
           ambiguity
-              ? "Estimates whose ambiguity_ratio (better over worse planar solution's error) is "
-                "at least " +
-                    num(st.options.ambiguity_ratio_threshold, 3) + "."
+              ? "Converged estimates whose ambiguity_ratio (better over worse planar solution's "
+                "error) is at least " +
+                    num(st.options.ambiguity_ratio_threshold, 3) +
+                    ", of the converged estimates with a ratio."
               : "Frames whose pose-marker rotation differs from the whole-target rotation of the "
                 "same solver by more than " +
                     num(st.options.flip_angle_deg, 3) + " degrees.";

@@ -157,15 +157,17 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
     }
     if (!std::isnan(e.time_us)) time.add(e.time_us);
     const auto [distance_class, angle_class] = classes_of(e.position);
+    if (e.status == SampleStatus::kFailed) {
+      ++s.failed;
+      continue;
+    }
+    // Ambiguity of converged estimates only: a failed estimate's ratio
+    // compares two solutions that did not converge.
     if (!std::isnan(e.ambiguity_ratio)) {
       const bool ambiguous = e.ambiguity_ratio >= options.ambiguity_ratio_threshold;
       count_ambiguity(s, ambiguous);
       if (distance_class) count_ambiguity(s.classes[*distance_class], ambiguous);
       if (angle_class) count_ambiguity(s.by_viewing_angle[*angle_class], ambiguous);
-    }
-    if (e.status == SampleStatus::kFailed) {
-      ++s.failed;
-      continue;
     }
     const PositionRecord& p = data.positions[e.position].record;
     // An unknown (or impossible) true distance: the estimate converged but

@@ -222,7 +222,7 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
   }
   {
     html::Table t{"ambiguity",
-                  "Planar ambiguity: estimates with ambiguity_ratio >= " +
+                  "Planar ambiguity: converged estimates with ambiguity_ratio >= " +
                       num(st.options.ambiguity_ratio_threshold, 3) +
                       " (the worse planar solution within that factor of the better), and flips: "
                       "frames whose pose-marker rotation differs from the whole-target rotation "

@@ -231,7 +231,7 @@ TEST_F(ReportStudy, CountsSkippedAndFailedEstimatesButExcludesThemFromAccuracy) 
 
 TEST_F(ReportStudy, CountsAmbiguousEstimatesAndFlips) {
   const db::SolverStudy& ippe = solver("ippe", "0");
-  // ratio 0.9 >= threshold 0.8 on every ippe estimate (converged or not).
+  // ratio 0.9 >= threshold 0.8 on every ippe estimate (none fails).
   EXPECT_EQ(ippe.ambiguity_checked, ippe.estimates);
   EXPECT_EQ(ippe.ambiguous, ippe.estimates);
   EXPECT_EQ(solver("hybrid_oi", "0").ambiguity_checked, 0u);
@@ -329,6 +329,30 @@ TEST(ReportStudyOptions, EdgePositionsJustOutsideTheRangeStayInTheEdgeClasses) {
     beyond += rig_test::synthetic_true_distance(spec, i) > 1.005 ? 1 : 0;
   EXPECT_GT(beyond, 0u);
   EXPECT_EQ(far.positions_outside_classes, beyond);
+}
+
+// Failed estimates are not in the ambiguity counts: with 30 % failures the
+// denominator is the converged estimates only.
+TEST(ReportStudyOptions, AmbiguityCountsConvergedEstimatesOnly) {
+  db_test::ScratchDir dir;
+  SyntheticRunSpec spec;
+  spec.positions = 20;
+  rig_test::SyntheticSolver ippe;
+  ippe.name = "ippe";
+  ippe.ambiguity_ratio = 0.9;
+  ippe.failure_rate = 0.3;
+  spec.solvers = {ippe};
+  rig_test::write_synthetic_run(dir.file("run.db"), spec);
+  const db::RunStudy st = db::study_run(dir.file("run.db"), db::ReportOptions{});
+  const db::SolverStudy* s = st.find("ippe", "0");
+  ASSERT_NE(s, nullptr);
+  ASSERT_GT(s->failed, 0u);  // P(no failure in 60) = 0.7^60 ~ 5e-10
+  EXPECT_EQ(s->ambiguity_checked, s->estimates - s->failed - s->skipped);
+  EXPECT_EQ(s->ambiguous, s->ambiguity_checked);
+  std::size_t by_class = 0;
+  for (const db::DistanceClassStudy& c : s->classes)
+    by_class += c.ambiguity_checked;
+  EXPECT_EQ(by_class, s->ambiguity_checked);
 }
 
 }  // namespace

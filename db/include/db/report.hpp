@@ -109,7 +109,7 @@ struct DistanceClassStudy {
   // corner noise (ClassCornerNoise). 1 is an efficient estimator; NaN when
   // bounds or corner noise were not recorded.
   double efficiency = 0;
-  std::size_t ambiguity_checked = 0, ambiguous = 0;  // estimates with an ambiguity ratio
+  std::size_t ambiguity_checked = 0, ambiguous = 0;  // converged estimates with an ambiguity ratio
   std::size_t flip_checked = 0, flips = 0;           // frames with both scopes (scope "0" only)
 };
 
