@@ -146,6 +146,10 @@ bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline) {
 
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
                                          double k) {
+  if (!(k > 0) || !std::isfinite(k)) {
+    throw stats::StatsError("compare_runs: k is " + std::to_string(k) +
+                            ", expected a finite threshold > 0 (standard errors)");
+  }
   std::vector<ComparedFigure> out;
   const bool same_plan = same_plan_of(candidate, baseline);
   for (const SolverStudy& c : candidate.solvers) {

@@ -2,11 +2,11 @@
 // The rows of one run that the report's statistics need, read from the run
 // database in a few indexed passes (private to db_report).
 //
-// Query plans (checked by tests/db/report_data_test.cpp with EXPLAIN QUERY
-// PLAN): every pass starts from positions (run_id, plan_index), reaches
-// frames through (position_id, frame_index) and estimates or detections
-// through their frame_id indexes, so no pass scans a whole table of a file
-// holding many runs.
+// Query plans (checked by ReportQueries.UseTheIndexesAndScanNoTable in
+// tests/db/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass starts from positions
+// (run_id, plan_index), reaches frames through (position_id, frame_index) and estimates or
+// detections through their frame_id indexes, so no pass scans a whole table of a file holding many
+// runs.
 #include <array>
 #include <cmath>
 #include <cstdint>

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "db/report.hpp"
+#include "db/stats_error.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_run.hpp"
 
@@ -175,6 +176,13 @@ TEST(ReportCompare, WelchFallbackUsesThePerPositionSummaries) {
   EXPECT_NEAR(distance->difference.standard_error, se, 1e-12 * se);
   EXPECT_NEAR(distance->difference.z, (cs.mean - bs.mean) / se, 1e-9);
   EXPECT_TRUE(distance->counted);
+}
+
+TEST(ReportCompare, RefusesANonPositiveThreshold) {
+  const db::RunStudy empty;
+  EXPECT_THROW(db::compare_runs(empty, empty, 0.0), db::stats::StatsError);
+  EXPECT_THROW(db::compare_runs(empty, empty, -3.0), db::stats::StatsError);
+  EXPECT_NO_THROW(db::compare_runs(empty, empty, 3.0));
 }
 
 TEST(ReportCompare, ParsesTheBaselineReference) {

@@ -262,6 +262,10 @@ bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline);
 // class the bias (mean over positions of their mean error; shown, not
 // counted). difference.significant uses k; worse and better the
 // family-wise regression_k.
+// k is a threshold in standard errors, a quantile of the standard normal
+// distribution (k = 3: two-sided tail 0.27 %); regression_k is the normal
+// quantile of that tail divided by the number of counted figures.
+// Precondition: k > 0 and finite; throws stats::StatsError otherwise.
 std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
                                          double k);
 

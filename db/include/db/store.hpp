@@ -132,7 +132,7 @@ class Store {
   // or an empty kind.
   void record_event(std::int64_t run_id, const std::string& kind, const std::string& message,
                     std::optional<std::int64_t> plan_index = std::nullopt);
-  // The run's events, oldest first.
+  // The run's events, oldest first. Throws StoreError for an unknown run.
   std::vector<RunEvent> events(std::int64_t run_id) const;
 
   // Plan indices the run has (ok or failed), ascending.
