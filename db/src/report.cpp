@@ -53,10 +53,7 @@ Report::Report(const std::string& database, const ReportOptions& options,
 }
 
 bool Report::regressed() const {
-  for (const ComparedFigure& f : comparison_) {
-    if (f.worse) return true;
-  }
-  return false;
+  return db::regressed(comparison_);
 }
 
 namespace {
