@@ -311,16 +311,22 @@ void add_comparison(const ReportInput& in, Section& sec) {
     worse += f.worse ? 1 : 0;
     better += f.better ? 1 : 0;
   }
-  const double family_k = in.comparison.empty() ? kNaN : in.comparison.front().regression_k;
+  // The thresholds differ by figure (Student's t for means over few
+  // positions); the page quotes the smallest, the normal one.
+  double family_k = kNaN;
+  for (const ComparedFigure& f : in.comparison)
+    if (!(f.regression_k >= family_k)) family_k = f.regression_k;
   sec.paragraph(
       std::to_string(worse) + " figure(s) significantly worse and " + std::to_string(better) +
       " significantly better than the baseline. A difference is flagged (\"changed\") beyond " +
       num(in.study.options.significance_k, 3) +
       " standard errors; errors and failure rates count as worse or better beyond " +
       num(family_k, 3) +
-      " standard errors, the same threshold raised by Bonferroni's correction for the number of "
-      "counted figures, so that a run drawn from the baseline's distributions is called "
-      "regressed no more often than a single comparison would be. Errors are compared as "
+      " standard errors (more for a mean over few positions, by Student's t: the table's z is "
+      "then compared with the t quantile of the same tail), the same threshold raised by "
+      "Bonferroni's correction for the number of counted figures, so that a run drawn from "
+      "the baseline's distributions is called regressed no more often than a single comparison "
+      "would be. Errors are compared as "
       "per-position means (frames of one position share its pose and are not independent); "
       "times, line parameters and class biases are flagged but never counted. Whole-run "
       "means depend on the distances visited: compare runs of the same plan.");

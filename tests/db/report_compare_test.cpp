@@ -15,9 +15,11 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <string>
 
 #include "db/report.hpp"
+#include "db/stats_compare.hpp"
 #include "db/stats_error.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_run.hpp"
@@ -52,7 +54,9 @@ TEST(ReportCompare, SameDistributionIsNotFlagged) {
 }
 
 // The regression threshold is k raised by Bonferroni over the counted
-// figures: m * P(|z| > regression_k) = P(|z| > k), two-sided normal.
+// figures, each under its own distribution: m * P(|T_dof| > regression_k) =
+// P(|z| > k), with T_dof Student's t for a paired mean over n positions
+// (dof n - 1) or a Welch mean, the normal for asymptotic figures.
 TEST(ReportCompare, RegressionThresholdIsBonferroniCorrected) {
   db_test::ScratchDir dir;
   rig_test::write_synthetic_run(dir.file("a.db"), base_spec(31));
@@ -63,9 +67,26 @@ TEST(ReportCompare, RegressionThresholdIsBonferroniCorrected) {
   for (const db::ComparedFigure& f : report.comparison())
     m += f.counted ? 1 : 0;
   ASSERT_GT(m, 10u);
-  const double k = report.comparison().front().regression_k;
-  EXPECT_GT(k, 3.0);
-  EXPECT_NEAR(m * std::erfc(k / std::sqrt(2.0)) / std::erfc(3.0 / std::sqrt(2.0)), 1.0, 1e-9);
+  const double inf = std::numeric_limits<double>::infinity();
+  std::size_t paired = 0;
+  for (const db::ComparedFigure& f : report.comparison()) {
+    const double dof = f.difference.dof;
+    EXPECT_GT(f.regression_k, 3.0) << f.figure;
+    // The threshold's tail is the family's share (bisection: 1e-12 relative in k).
+    EXPECT_NEAR(
+        m * db::stats::two_sided_tail(f.regression_k, dof) / db::stats::two_sided_tail(3.0, inf),
+        1.0, 1e-9)
+        << f.figure;
+    if (f.figure.find("paired over") != std::string::npos) {
+      ++paired;
+      // A t threshold is above the normal one for the same tail.
+      const double normal_k = db::stats::two_sided_threshold(
+          db::stats::two_sided_tail(3.0, inf) / static_cast<double>(m), inf);
+      EXPECT_GT(f.regression_k, normal_k) << f.figure;
+      EXPECT_TRUE(std::isfinite(dof)) << f.figure;
+    }
+  }
+  EXPECT_GT(paired, 0u);
 }
 
 TEST(ReportCompare, ASolverThatGotWorseIsFlaggedAndOnlyIt) {

@@ -93,3 +93,35 @@ TEST(CompareEstimates, RejectsANegativeStandardError) {
 }
 
 }  // namespace
+
+// Student's t two-sided tails and thresholds. Closed forms where the
+// distribution has one (1 and 2 degrees of freedom: Cauchy, and
+// 1 - k / sqrt(k^2 + 2)); critical values of the NIST/SEMATECH e-Handbook's
+// t table (§1.3.6.7.2, three decimals, hence 5e-4) elsewhere.
+TEST(StudentT, TwoSidedTailMatchesTheClosedForms) {
+  const double pi = 3.14159265358979323846;
+  for (double k : {0.1, 1.0, 3.0, 30.0}) {
+    EXPECT_NEAR(db::stats::two_sided_tail(k, 1.0), 1.0 - 2.0 / pi * std::atan(k), 1e-13) << k;
+    EXPECT_NEAR(db::stats::two_sided_tail(k, 2.0), 1.0 - k / std::sqrt(k * k + 2.0), 1e-13) << k;
+    EXPECT_NEAR(db::stats::two_sided_tail(k, std::numeric_limits<double>::infinity()),
+                std::erfc(k / std::sqrt(2.0)), 1e-15)
+        << k;
+  }
+  EXPECT_EQ(db::stats::two_sided_tail(0.0, 7.0), 1.0);
+  // Far out in dof the t tail approaches the normal one.
+  EXPECT_NEAR(db::stats::two_sided_tail(3.0, 1e7), std::erfc(3.0 / std::sqrt(2.0)), 1e-8);
+}
+
+TEST(StudentT, ThresholdsMatchTheTable) {
+  EXPECT_NEAR(db::stats::two_sided_threshold(0.05, 1), 12.706, 5e-4);
+  EXPECT_NEAR(db::stats::two_sided_threshold(0.05, 10), 2.228, 5e-4);
+  EXPECT_NEAR(db::stats::two_sided_threshold(0.01, 5), 4.032, 5e-4);
+  EXPECT_NEAR(db::stats::two_sided_threshold(0.01, 30), 2.750, 5e-4);
+  EXPECT_NEAR(db::stats::two_sided_threshold(0.05, std::numeric_limits<double>::infinity()), 1.960,
+              5e-4);
+  // Inverse of the tail to its bisection tolerance.
+  const double k = db::stats::two_sided_threshold(0.0027, 4);
+  EXPECT_NEAR(db::stats::two_sided_tail(k, 4), 0.0027, 1e-12);
+  EXPECT_THROW(db::stats::two_sided_threshold(0.0, 4), db::stats::StatsError);
+  EXPECT_THROW(db::stats::two_sided_threshold(0.5, 0), db::stats::StatsError);
+}

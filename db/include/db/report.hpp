@@ -196,7 +196,9 @@ struct ComparedFigure {
   // correction over the m counted figures of the comparison, so that the
   // chance that a run from the baseline's distributions is called
   // "regressed" is at most that of one comparison at k (0.27 % at k = 3):
-  // two-sided P(|z| > regression_k) = P(|z| > k) / m.
+  // two-sided P(|T| > regression_k) = P(|z| > k) / m, with T Student's t of
+  // the figure's degrees of freedom (difference.dof: n - 1 for a paired mean
+  // over n positions, Welch's for unpaired means) or normal when infinite.
   double regression_k = 0;
   // A counted figure significantly larger than the baseline's by
   // regression_k / smaller by it.

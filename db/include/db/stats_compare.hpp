@@ -43,6 +43,21 @@ Difference compare_means(const Summary& candidate, const Summary& baseline, doub
 Difference compare_estimates(double candidate, double candidate_se, double baseline,
                              double baseline_se, double k = 3.0);
 
+// Two-sided tail probability of k standard errors: P(|T| > k) for Student's
+// t with `dof` degrees of freedom, or for the normal distribution when dof is
+// infinite: 2 (1 - F(k)). Computed as the regularized incomplete beta
+// I_{dof/(dof+k^2)}(dof/2, 1/2) (Abramowitz & Stegun 26.7.1) by its continued
+// fraction (Lentz), to about 1e-14 relative.
+// Preconditions: k >= 0 finite, dof > 0 (or +infinity); throws StatsError.
+double two_sided_tail(double k, double dof);
+
+// The k with two_sided_tail(k, dof) = p: the threshold that keeps a
+// comparison's false-alarm rate at p for a Student-t figure (e.g. a paired
+// mean over n positions, dof = n - 1) as for a normal one. By bisection to
+// 1e-12 relative. Preconditions: 0 < p < 1, dof > 0 (or +infinity); throws
+// StatsError.
+double two_sided_threshold(double p, double dof);
+
 // Slopes of two independent line fits, by compare_estimates.
 Difference compare_slopes(const LineFit& candidate, const LineFit& baseline, double k = 3.0);
 
