@@ -103,10 +103,8 @@ void check_camera(vision::FrameSource& camera, const SweepConfig& config) {
   const vision::Frame frame = camera.grab(config.faults.grab_timeout);
   const vision::Camera& model = config.camera;
   if (frame.image.cols != model.width_px() || frame.image.rows != model.height_px()) {
-    const std::string calibration = config.camera_calibration_path.empty()
-                                        ? "the built-in paper camera (capture.calibration = \"\")"
-                                        : config.camera_calibration_path;
-    throw BadInput(config.sweep_file + ": capture.calibration: " + calibration + " is for " +
+    throw BadInput(config.sweep_file +
+                   ": capture.calibration: " + config.calibration_description() + " is for " +
                    std::to_string(model.width_px()) + "x" + std::to_string(model.height_px()) +
                    " px but camera " + config.camera_spec + " delivers " +
                    std::to_string(frame.image.cols) + "x" + std::to_string(frame.image.rows) +

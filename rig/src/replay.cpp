@@ -269,14 +269,11 @@ SweepConfig replay_config(const SweepConfig& config, const RecordedRun& recorded
       }
       const vision::Camera& model = config.camera;
       if (image.cols != model.width_px() || image.rows != model.height_px()) {
-        const std::string calibration =
-            config.camera_calibration_path.empty()
-                ? "the built-in paper camera (capture.calibration = \"\")"
-                : config.camera_calibration_path;
-        throw RunMismatch(config.sweep_file + ": capture.calibration: " + calibration + " is for " +
-                          size_text(model.width_px(), model.height_px()) + " but the frames of " +
-                          recorded.describe() + " (first: " + f.image_path + ") are " +
-                          size_text(image.cols, image.rows) +
+        throw RunMismatch(config.sweep_file +
+                          ": capture.calibration: " + config.calibration_description() +
+                          " is for " + size_text(model.width_px(), model.height_px()) +
+                          " but the frames of " + recorded.describe() + " (first: " + f.image_path +
+                          ") are " + size_text(image.cols, image.rows) +
                           "; expected the calibration of the camera that recorded them");
       }
       SweepConfig replay = config;

@@ -73,6 +73,16 @@ class RecordedRunFixture : public ::testing::Test {
   }
 
   // An ok position at the plan's XY, measured 1 µm off, with `frames` saved PNGs.
+  // Position 0 of a one-position run at (400, 150), read back there, with
+  // the given frames.
+  void append_at_400_150(std::int64_t run, std::vector<db::FrameRecord> frames) {
+    db::PositionRecord p;
+    p.commanded_x_mm = p.measured_x_mm.emplace(400);
+    p.commanded_y_mm = p.measured_y_mm.emplace(150);
+    p.frames = std::move(frames);
+    store_->append_position(run, p);
+  }
+
   void append_ok(std::int64_t run, std::int64_t index, double x, double y, int frames) {
     db::PositionRecord p;
     p.plan_index = index;
@@ -319,14 +329,9 @@ TEST_F(RecordedRunFixture, MoreFramesPerPositionThanTheRunSavedAreRefusedNamingB
 
 TEST_F(RecordedRunFixture, ARunWithoutSavedFramesCannotBeReplayed) {
   const std::int64_t run = start_run({{400, 150}});
-  db::PositionRecord p;
-  p.commanded_x_mm = 400;
-  p.commanded_y_mm = 150;
-  p.measured_x_mm = 400;
-  p.measured_y_mm = 150;
-  p.frames.resize(2);  // frames measured, none saved
-  p.frames[1].index = 1;
-  store_->append_position(run, p);
+  std::vector<db::FrameRecord> frames(2);  // frames measured, none saved
+  frames[1].index = 1;
+  append_at_400_150(run, frames);
   const rig::RecordedRun recorded = rig::RecordedRun::load(*store_, run);
   EXPECT_EQ(recorded.saved_frames_per_position(), 0);
   try {
@@ -341,16 +346,10 @@ TEST_F(RecordedRunFixture, ARunWithoutSavedFramesCannotBeReplayed) {
 
 TEST_F(RecordedRunFixture, FramesOfAnotherSizeThanTheCalibrationAreRefused) {
   const std::int64_t run = start_run({{400, 150}});
-  db::PositionRecord p;
-  p.commanded_x_mm = 400;
-  p.commanded_y_mm = 150;
-  p.measured_x_mm = 400;
-  p.measured_y_mm = 150;
   db::FrameRecord f;
   f.image_path = write_png("vga.png", 1, 640, 480);
   f.image_sha256 = db::sha256_hex(file_bytes(*f.image_path));
-  p.frames.push_back(f);
-  store_->append_position(run, p);
+  append_at_400_150(run, {f});
   try {
     rig::replay_config(config(1), rig::RecordedRun::load(*store_, run));
     FAIL() << "no error";

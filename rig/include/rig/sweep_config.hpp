@@ -167,6 +167,13 @@ struct SweepConfig {
   // last positions (the run then resumes from an earlier one).
   bool durable_commits = true;
 
+  // The calibration as a message names it: its path, or the built-in paper
+  // camera when capture.calibration is "".
+  std::string calibration_description() const {
+    return camera_calibration_path.empty()
+               ? "the built-in paper camera (capture.calibration = \"\")"
+               : camera_calibration_path;
+  }
   // Every resolved value (absolute paths, defaults filled in, the plan's
   // description and size but not its positions), for runs.config_json.
   nlohmann::json to_json() const;
