@@ -1,5 +1,5 @@
 // Capture through the GigE Vision stack on loopback: vision::GigeSource
-// against the simulated camera (sim::CameraServer) at the paper's 736x571
+// against the simulated camera (sim::camera::CameraServer) at the paper's 736x571
 // Mono8.
 //   BM_SimCameraFreeRun      frames/s, every frame rendered from the bench pose
 //   BM_GigeTransportFreeRun  frames/s of the transport alone: Aravis's GV fake
@@ -16,19 +16,19 @@
 #include <memory>
 #include <vector>
 
-#include "sim/camera_server.hpp"
+#include "sim/camera/server.hpp"
 #include "vision/gige_source.hpp"
 
 namespace {
 
 using namespace std::chrono_literals;
 
-std::unique_ptr<sim::CameraServer> start_sim_camera() {
-  auto renderer = std::make_shared<const sim::SceneRenderer>(
+std::unique_ptr<sim::camera::CameraServer> start_sim_camera() {
+  auto renderer = std::make_shared<const sim::scene::SceneRenderer>(
       vision::Camera::paper_default(), vision::Target::paper_default(), vision::Codebook());
-  sim::CameraServerOptions options;
+  sim::camera::CameraServerOptions options;
   options.real_time_exposure = false;
-  auto server = std::make_unique<sim::CameraServer>(
+  auto server = std::make_unique<sim::camera::CameraServer>(
       renderer, vision::RigGeometry::load(std::string(RIG_SOURCE_DIR) + "/config/rigs/sim.toml"),
       [] { return std::make_pair(250.0, 150.0); }, options);
   server->start();

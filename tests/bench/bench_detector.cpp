@@ -1,6 +1,6 @@
 // Detector benchmark (issue 3, §7): our detector against OpenCV's ArUco
 // detector (CORNER_REFINE_SUBPIX) and AprilTag 3 (quad_decimate 2, one
-// thread), on the same frames of sim::SceneRenderer: the paper's camera and
+// thread), on the same frames of sim::scene::SceneRenderer: the paper's camera and
 // sheet, the pose marker at 0.10-1.00 m anywhere in the image, tilt up to
 // 40 degrees, the renderer's default optics and sensor noise.
 //
@@ -27,8 +27,8 @@
 #include <functional>
 #include <opencv2/aruco.hpp>
 
-#include "../vision/detector_frames.hpp"
-#include "sim/scene_renderer.hpp"
+#include "detector_frames.hpp"
+#include "sim/scene/renderer.hpp"
 #include "vision/detector.hpp"
 #include "vision/solvers.hpp"
 
@@ -49,13 +49,13 @@ struct FrameSet {
   vision::Target target = vision::Target::paper_default();
   vision::Codebook codebook;
   std::vector<vision::Pose> poses;
-  std::vector<sim::RenderedFrame> frames;
+  std::vector<sim::scene::RenderedFrame> frames;
 };
 
 const FrameSet& frame_set() {
   static const FrameSet* set = [] {
     auto* s = new FrameSet;
-    const sim::SceneRenderer renderer(s->camera, s->target, s->codebook);
+    const sim::scene::SceneRenderer renderer(s->camera, s->target, s->codebook);
     s->poses = detector_test::sample_poses(s->camera, kFrames, 2024);
     for (int i = 0; i < kFrames; ++i)
       s->frames.push_back(renderer.render(s->poses[i], 7000 + i));

@@ -12,14 +12,14 @@
 #include <algorithm>
 #include <chrono>
 #include <memory>
-#include <motion/drive_profile.hpp>
-#include <motion/modbus_bench.hpp>
-#include <sim/bench_config.hpp>
-#include <sim/bench_server.hpp>
 #include <string>
 #include <vector>
 
-#include "../motion/child_process.hpp"
+#include "child_process.hpp"
+#include "motion/drive_profile.hpp"
+#include "motion/modbus_bench.hpp"
+#include "sim/bench/config.hpp"
+#include "sim/bench/server.hpp"
 
 namespace {
 
@@ -27,9 +27,9 @@ using Clock = std::chrono::steady_clock;
 
 const std::string kSimFile = std::string(RIG_SOURCE_DIR) + "/config/benches/sim.toml";
 
-std::unique_ptr<sim::BenchServer> start_sim() {
-  auto server = std::make_unique<sim::BenchServer>(motion::load_drive_profile(kSimFile),
-                                                   sim::load_bench_sim_config(kSimFile));
+std::unique_ptr<sim::bench::BenchServer> start_sim() {
+  auto server = std::make_unique<sim::bench::BenchServer>(
+      motion::load_drive_profile(kSimFile), sim::bench::load_bench_sim_config(kSimFile));
   server->start();
   return server;
 }

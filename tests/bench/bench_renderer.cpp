@@ -6,7 +6,7 @@
 #include <cmath>
 #include <opencv2/core/utility.hpp>
 
-#include "sim/scene_renderer.hpp"
+#include "sim/scene/renderer.hpp"
 
 namespace {
 
@@ -22,20 +22,20 @@ vision::Pose pose_at(double distance_m, double tilt_deg) {
   return T;
 }
 
-const sim::SceneRenderer& renderer(const sim::SceneOptions& options = {}) {
+const sim::scene::SceneRenderer& renderer(const sim::scene::SceneOptions& options = {}) {
   static const vision::Codebook codebook;
-  static const sim::SceneRenderer r(vision::Camera::paper_default(),
-                                    vision::Target::paper_default(), codebook, options);
+  static const sim::scene::SceneRenderer r(vision::Camera::paper_default(),
+                                           vision::Target::paper_default(), codebook, options);
   return r;
 }
 
 // args: distance in cm, tilt in degrees.
 void BM_RenderFrame(benchmark::State& state) {
-  const sim::SceneRenderer& r = renderer();
+  const sim::scene::SceneRenderer& r = renderer();
   const vision::Pose T = pose_at(state.range(0) / 100.0, static_cast<double>(state.range(1)));
   uint64_t seed = 1;
   for (auto _ : state) {
-    sim::RenderedFrame frame = r.render(T, seed++);
+    sim::scene::RenderedFrame frame = r.render(T, seed++);
     benchmark::DoNotOptimize(frame.image.data);
   }
 }
@@ -50,11 +50,11 @@ BENCHMARK(BM_RenderFrame)
     ->Unit(benchmark::kMillisecond);
 
 void BM_RenderMovingFrame(benchmark::State& state) {
-  const sim::SceneRenderer& r = renderer();
+  const sim::scene::SceneRenderer& r = renderer();
   const vision::Pose a = pose_at(0.40, 10), b = pose_at(0.41, 12);
   uint64_t seed = 1;
   for (auto _ : state) {
-    sim::RenderedFrame frame = r.render_moving(a, b, seed++);
+    sim::scene::RenderedFrame frame = r.render_moving(a, b, seed++);
     benchmark::DoNotOptimize(frame.image.data);
   }
 }
@@ -63,8 +63,8 @@ BENCHMARK(BM_RenderMovingFrame)->Unit(benchmark::kMillisecond);
 void BM_BuildRayTable(benchmark::State& state) {
   const vision::Codebook codebook;
   for (auto _ : state) {
-    sim::SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
-                         codebook);
+    sim::scene::SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                                codebook);
     benchmark::DoNotOptimize(&r);
   }
 }

@@ -15,7 +15,7 @@
 #include <filesystem>
 #include <string>
 
-#include "db/report.hpp"
+#include "db/report/report.hpp"
 #include "synthetic_run.hpp"
 
 namespace {
@@ -60,7 +60,7 @@ void BM_StudyRun(benchmark::State& state) {
   const std::string& db = database();
   std::size_t estimates = 0;
   for (auto _ : state) {
-    const db::RunStudy study = db::study_run(db, db::ReportOptions{});
+    const db::report::RunStudy study = db::report::study_run(db, db::report::ReportOptions{});
     estimates = study.estimates;
     benchmark::DoNotOptimize(study.solvers.data());
   }
@@ -75,7 +75,7 @@ void BM_ReportWrite(benchmark::State& state) {
   const std::string& db = database();
   const std::string out = "/tmp/rig-bench-report-out-" + std::to_string(getpid());
   for (auto _ : state) {
-    const db::Report report(db, db::ReportOptions{});
+    const db::report::Report report(db, db::report::ReportOptions{});
     report.write(out);
   }
   std::filesystem::remove_all(out);

@@ -13,10 +13,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <db/store.hpp>
 #include <filesystem>
 #include <string>
 #include <vector>
+
+#include "db/store/store.hpp"
 
 namespace {
 
@@ -39,8 +40,8 @@ class ScratchDir {
   std::filesystem::path path_;
 };
 
-db::RunDescription run_description() {
-  db::RunDescription d;
+db::store::RunDescription run_description() {
+  db::store::RunDescription d;
   d.config_json = R"({"frames_per_position":2})";
   d.plan_json = R"({"kind":"grid"})";
   d.plan_size = 100'000'000;
@@ -48,8 +49,8 @@ db::RunDescription run_description() {
   return d;
 }
 
-db::PositionRecord position(std::int64_t plan_index) {
-  db::PositionRecord p;
+db::store::PositionRecord position(std::int64_t plan_index) {
+  db::store::PositionRecord p;
   p.plan_index = plan_index;
   p.commanded_x_mm = 0.1 * plan_index;
   p.measured_x_mm = p.commanded_x_mm + 0.002;
@@ -57,12 +58,12 @@ db::PositionRecord position(std::int64_t plan_index) {
   p.true_distance_m = 0.5;
   p.stage_times = {{"move", 0.4}, {"settle", 0.1}, {"capture", 0.03}, {"detect", 0.004}};
   for (int f = 0; f < kFrames; ++f) {
-    db::FrameRecord frame;
+    db::store::FrameRecord frame;
     frame.index = f;
     frame.host_timestamp_ns = 1'700'000'000'000'000'000LL + plan_index;
     frame.source = "sim";
     for (int m = 0; m < kMarkers; ++m) {
-      db::DetectionRecord d;
+      db::store::DetectionRecord d;
       d.marker_id = m;
       for (int c = 0; c < 8; ++c)
         d.corners_px[c] = 100.0 + 17.0 * c + m;
@@ -70,7 +71,7 @@ db::PositionRecord position(std::int64_t plan_index) {
     }
     for (int s = 0; s < kSolvers; ++s) {
       for (const char* scope : {"0", "target"}) {
-        db::EstimateRecord e;
+        db::store::EstimateRecord e;
         e.solver = "solver_" + std::to_string(s);
         e.scope = scope;
         e.R_cam_target = {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -92,11 +93,11 @@ db::PositionRecord position(std::int64_t plan_index) {
 
 void BM_AppendPosition(benchmark::State& state) {
   ScratchDir dir;
-  db::StoreOptions options;
+  db::store::StoreOptions options;
   options.durable_commits = state.range(0) != 0;
-  db::Store store(dir.file("bench.db"), options);
+  db::store::Store store(dir.file("bench.db"), options);
   const std::int64_t run = store.start_run(run_description());
-  db::PositionRecord p = position(0);
+  db::store::PositionRecord p = position(0);
   std::vector<double> us;
   for (auto _ : state) {
     const auto t0 = Clock::now();
@@ -116,9 +117,9 @@ BENCHMARK(BM_AppendPosition)->ArgName("durable")->Arg(1)->Arg(0)->UseRealTime();
 
 void BM_ReadOneSolversEstimates(benchmark::State& state) {
   ScratchDir dir;
-  db::StoreOptions options;
+  db::store::StoreOptions options;
   options.durable_commits = false;  // setup speed only; reads do not depend on it
-  db::Store store(dir.file("bench.db"), options);
+  db::store::Store store(dir.file("bench.db"), options);
   const std::int64_t run = store.start_run(run_description());
   constexpr int kPositions = 1000;
   for (int i = 0; i < kPositions; ++i)

@@ -1,13 +1,13 @@
 // Sweep benchmarks (issue 6 §8): what one bench position costs the
 // controller once the bench has settled and the frames are in hand, i.e.
-// everything of rig::Controller's measure_position and append_position except
+// everything of rig::sweep::Controller's measure_position and append_position except
 // motion, settling and exposure (rig/src/controller.cpp):
-//   per frame  rig::FrameMeasurer::measure (detector + every solver of the
+//   per frame  vision::FrameMeasurer::measure (detector + every solver of the
 //              registry on the pose marker's scope and on the target's scope)
-//              and rig::to_frame_record;
-//   per position  rig::ground_truth_at (true pose, viewing angle, visible
+//              and rig::sweep::to_frame_record;
+//   per position  rig::sweep::ground_truth_at (true pose, viewing angle, visible
 //              markers, Cramér-Rao bounds) and, for the *Store benchmarks,
-//              db::Store::append_position into a SQLite file in /tmp with
+//              db::store::Store::append_position into a SQLite file in /tmp with
 //              record_store_time on, as a sweep opens it.
 //
 // Frames: the simulated rig as `rig sim --config config/sim.toml` renders it
@@ -60,13 +60,13 @@
 #include <string>
 #include <vector>
 
-#include "db/store.hpp"
-#include "rig/controller.hpp"
-#include "rig/frame_measurement.hpp"
-#include "rig/ground_truth.hpp"
-#include "sim/scene_renderer.hpp"
+#include "db/store/store.hpp"
+#include "rig/sweep/controller.hpp"
+#include "rig/sweep/ground_truth.hpp"
+#include "sim/scene/renderer.hpp"
 #include "vision/camera.hpp"
 #include "vision/codebook.hpp"
+#include "vision/frame_measurement.hpp"
 #include "vision/rig_geometry.hpp"
 #include "vision/target.hpp"
 
@@ -102,11 +102,11 @@ struct SimulatedRig {
 const SimulatedRig& simulated_rig() {
   static const SimulatedRig* rig = [] {
     auto* r = new SimulatedRig;
-    const sim::SceneRenderer renderer(r->camera, r->target, vision::Codebook());
+    const sim::scene::SceneRenderer renderer(r->camera, r->target, vision::Codebook());
     std::uint64_t seed = 1;  // config/sim.toml: frame k's noise from seed + k
     for (double x : kBenchX_mm) {
-      const rig::GroundTruth truth =
-          rig::ground_truth_at(r->geometry, r->camera, r->target, x, kBenchY_mm);
+      const rig::sweep::GroundTruth truth =
+          rig::sweep::ground_truth_at(r->geometry, r->camera, r->target, x, kBenchY_mm);
       if (truth.visible_markers.size() != r->target.markers.size())
         throw std::runtime_error(
             "bench position x = " + std::to_string(x) + " mm, y = " + std::to_string(kBenchY_mm) +
@@ -139,12 +139,12 @@ struct StageSums {
 };
 
 // What Controller::measure_position builds once the frames are in hand.
-db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const SimulatedRig& rig,
-                                    std::int64_t plan_index, int frames_per_position,
-                                    StageSums& sums) {
+db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer,
+                                           const SimulatedRig& rig, std::int64_t plan_index,
+                                           int frames_per_position, StageSums& sums) {
   const BenchPosition& p =
       rig.positions[static_cast<std::size_t>(plan_index) % rig.positions.size()];
-  db::PositionRecord rec;
+  db::store::PositionRecord rec;
   rec.plan_index = plan_index;
   rec.commanded_x_mm = p.x_mm;
   rec.commanded_y_mm = p.y_mm;
@@ -153,8 +153,8 @@ db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const Si
   rec.stage_times = {{"move", 0}, {"settle", 0}, {"capture", 0}};
 
   const auto truth_start = Clock::now();
-  const rig::GroundTruth truth =
-      rig::ground_truth_at(rig.geometry, rig.camera, rig.target, p.x_mm, p.y_mm);
+  const rig::sweep::GroundTruth truth =
+      rig::sweep::ground_truth_at(rig.geometry, rig.camera, rig.target, p.x_mm, p.y_mm);
   rec.true_distance_m = truth.distance_m;
   rec.true_viewing_angle_deg = truth.viewing_angle_deg;
   rec.visible_markers = truth.visible_markers;
@@ -164,7 +164,7 @@ db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const Si
   double detect_s = 0;
   std::map<std::string, double> solve_s;
   for (int k = 0; k < frames_per_position; ++k) {
-    const rig::FrameMeasurement m = measurer.measure(p.frames[static_cast<std::size_t>(k)]);
+    const vision::FrameMeasurement m = measurer.measure(p.frames[static_cast<std::size_t>(k)]);
     detect_s += m.detect_s;
     for (const auto& [name, s] : m.solve_s) {
       solve_s[name] += s;
@@ -172,7 +172,7 @@ db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const Si
     }
     sums.detections += static_cast<std::int64_t>(m.detections.size());
     const auto record_start = Clock::now();
-    db::FrameRecord f = rig::to_frame_record(m, k);
+    db::store::FrameRecord f = rig::sweep::to_frame_record(m, k);
     f.host_timestamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
@@ -185,7 +185,7 @@ db::PositionRecord measure_position(const rig::FrameMeasurer& measurer, const Si
   rec.stage_times.push_back({"detect", detect_s});
   for (const auto& name : measurer.solver_names())
     rec.stage_times.push_back({"solve:" + name, solve_s[name]});
-  rec.status = db::PositionStatus::kOk;
+  rec.status = db::store::PositionStatus::kOk;
   return rec;
 }
 
@@ -208,21 +208,21 @@ class ScratchDir {
 // A store opened as `rig sweep` opens it, with one running run.
 struct SweepStore {
   ScratchDir dir;
-  db::Store store;
+  db::store::Store store;
   std::int64_t run_id;
 
   explicit SweepStore(bool durable_commits)
       : store(dir.file("run.db"), options(durable_commits)),
         run_id(store.start_run(description())) {}
 
-  static db::StoreOptions options(bool durable_commits) {
-    db::StoreOptions o;
+  static db::store::StoreOptions options(bool durable_commits) {
+    db::store::StoreOptions o;
     o.durable_commits = durable_commits;
     o.record_store_time = true;
     return o;
   }
-  static db::RunDescription description() {
-    db::RunDescription d;
+  static db::store::RunDescription description() {
+    db::store::RunDescription d;
     d.config_json = R"({"frames_per_position":3})";
     d.plan_json = R"({"kind":"grid"})";
     d.plan_size = 1'000'000'000;
@@ -250,12 +250,12 @@ void report_stages(benchmark::State& state, const StageSums& sums, std::int64_t 
 void BM_PositionCompute(benchmark::State& state) {
   const int frames = static_cast<int>(state.range(0));
   const SimulatedRig& rig = simulated_rig();
-  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  const vision::FrameMeasurer measurer(rig.camera, rig.target);
   StageSums sums;
   std::int64_t index = 0;
   for (auto _ : state) {
     const auto start = Clock::now();
-    db::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
+    db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
     benchmark::DoNotOptimize(rec);
     sums.position_s.push_back(seconds_since(start));
   }
@@ -271,13 +271,13 @@ BENCHMARK(BM_PositionCompute)
 void BM_PositionComputeAndStore(benchmark::State& state) {
   const int frames = static_cast<int>(state.range(0));
   const SimulatedRig& rig = simulated_rig();
-  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  const vision::FrameMeasurer measurer(rig.camera, rig.target);
   SweepStore db(state.range(1) != 0);
   StageSums sums;
   std::int64_t index = 0;
   for (auto _ : state) {
     const auto start = Clock::now();
-    const db::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
+    const db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
     const auto store_start = Clock::now();
     db.store.append_position(db.run_id, rec);
     sums.store += seconds_since(store_start);
@@ -296,10 +296,10 @@ BENCHMARK(BM_PositionComputeAndStore)
 
 void BM_EstimateInsertRate(benchmark::State& state) {
   const SimulatedRig& rig = simulated_rig();
-  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  const vision::FrameMeasurer measurer(rig.camera, rig.target);
   StageSums unused;
   // A real position as the controller stores it, appended under new plan indices.
-  db::PositionRecord rec = measure_position(measurer, rig, 0, kMaxFramesPerPosition, unused);
+  db::store::PositionRecord rec = measure_position(measurer, rig, 0, kMaxFramesPerPosition, unused);
   std::int64_t estimate_rows = 0, detection_rows = 0;
   for (const auto& f : rec.frames) {
     estimate_rows += static_cast<std::int64_t>(f.estimates.size());
@@ -347,14 +347,14 @@ double resident_at(const std::vector<std::pair<std::int64_t, double>>& samples,
 void BM_ResidentMemory10k(benchmark::State& state) {
   constexpr std::int64_t kPositions = 10'000;
   const SimulatedRig& rig = simulated_rig();
-  const rig::FrameMeasurer measurer(rig.camera, rig.target);
+  const vision::FrameMeasurer measurer(rig.camera, rig.target);
   SweepStore db(/*durable_commits=*/true);
   StageSums sums;
   std::vector<std::pair<std::int64_t, double>> samples;
   double sqlite_heap_at_100 = 0;  // SQLite's own allocations (page cache, statements), MiB
   for (auto _ : state) {
     for (std::int64_t index = 0; index < kPositions; ++index) {
-      const db::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
+      const db::store::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
       const auto store_start = Clock::now();
       db.store.append_position(db.run_id, rec);
       sums.store += seconds_since(store_start);

@@ -1,8 +1,9 @@
 // Bench URLs: TCP and RTU forms, defaults, and the exact error for bad ones.
+#include "motion/bench_url.hpp"
+
 #include <gtest/gtest.h>
 
-#include <motion/bench_url.hpp>
-#include <motion/errors.hpp>
+#include "motion/errors.hpp"
 
 namespace {
 

@@ -1,13 +1,15 @@
 // Drive profiles: the shipped files load; a missing, unknown or inconsistent
 // field is refused with an error naming it; 32-bit words in both orders.
+#include "motion/drive_profile.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <motion/drive_profile.hpp>
-#include <motion/errors.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
+
+#include "motion/errors.hpp"
 
 namespace {
 

@@ -5,9 +5,9 @@
 
 #include <chrono>
 #include <cmath>
-#include <motion/errors.hpp>
 #include <thread>
 
+#include "motion/errors.hpp"
 #include "sim_bench_fixture.hpp"
 
 namespace {
@@ -66,8 +66,8 @@ TEST_F(ModbusBench, SoftLimitErrorNamesTargetAndLimits) {
 
 TEST_F(ModbusBench, AlarmRaisesBenchFaultWithCodeAndMeaning) {
   auto bench = homed_bench();
-  sim::FaultPlan faults;
-  faults.alarm_at = sim::AlarmAt{5, 0, 0.5, sim::kAlarmFollowingError};
+  sim::bench::FaultPlan faults;
+  faults.alarm_at = sim::bench::AlarmAt{5, 0, 0.5, sim::bench::kAlarmFollowingError};
   server_->inject(faults);
   bench->move_to(10, 0);
   try {
@@ -84,8 +84,8 @@ TEST_F(ModbusBench, AlarmRaisesBenchFaultWithCodeAndMeaning) {
 
 TEST_F(ModbusBench, ResetAlarmClearsItAndTheBenchMovesAgain) {
   auto bench = homed_bench();
-  sim::FaultPlan faults;
-  faults.alarm_at = sim::AlarmAt{10, 0, 0.5, 2};
+  sim::bench::FaultPlan faults;
+  faults.alarm_at = sim::bench::AlarmAt{10, 0, 0.5, 2};
   server_->inject(faults);
   bench->move_to(20, 0);
   EXPECT_THROW(bench->wait_settled(5s), motion::BenchFault);
@@ -136,7 +136,7 @@ TEST_F(ModbusBench, WaitSettledTimesOutWhileTheBenchIsStillMoving) {
 
 TEST_F(ModbusBench, RefusedWriteRaisesBenchWriteError) {
   auto bench = homed_bench();
-  sim::FaultPlan faults;
+  sim::bench::FaultPlan faults;
   faults.refuse_writes = 1;
   server_->inject(faults);
   try {
@@ -151,7 +151,7 @@ TEST_F(ModbusBench, RefusedWriteRaisesBenchWriteError) {
 
 TEST_F(ModbusBench, WriteTheDriveDidNotStoreIsCaughtByReadBack) {
   auto bench = homed_bench();
-  sim::FaultPlan faults;
+  sim::bench::FaultPlan faults;
   faults.ignore_writes = 1;
   server_->inject(faults);
   try {
@@ -166,7 +166,7 @@ TEST_F(ModbusBench, WriteTheDriveDidNotStoreIsCaughtByReadBack) {
 
 TEST_F(ModbusBench, SlowAnswersWithinTheResponseTimeoutAreNoFault) {
   auto bench = homed_bench();
-  sim::FaultPlan faults;
+  sim::bench::FaultPlan faults;
   faults.reply_delay_ms = 10;  // a fifth of the 50 ms response timeout
   server_->inject(faults);
   bench->move_to(3, 4);
@@ -177,7 +177,7 @@ TEST_F(ModbusBench, SlowAnswersWithinTheResponseTimeoutAreNoFault) {
 TEST_F(ModbusBench, ReconnectsAfterADroppedConnectionAndResumesTheMove) {
   auto bench = homed_bench();
   bench->move_to(30, 20);
-  sim::FaultPlan faults;
+  sim::bench::FaultPlan faults;
   faults.drop_after_requests = 3;  // during wait_settled's polling
   server_->inject(faults);
   const motion::BenchStatus s = bench->wait_settled(5s);
@@ -189,7 +189,7 @@ TEST_F(ModbusBench, ReconnectsAfterADroppedConnectionAndResumesTheMove) {
 TEST_F(ModbusBench, ReconnectsWhenTheDriveStopsAnsweringForAWhile) {
   auto bench = homed_bench();
   bench->move_to(30, 20);
-  sim::FaultPlan faults;
+  sim::bench::FaultPlan faults;
   faults.stall_after_requests = 2;
   faults.stall_s = 0.3;  // six response timeouts, well inside the 1.5 s reconnect window
   server_->inject(faults);

@@ -8,11 +8,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <motion/errors.hpp>
-#include <motion/modbus_bench.hpp>
 #include <numeric>
 #include <random>
-#include <sim/bench_server.hpp>
+
+#include "motion/errors.hpp"
+#include "motion/modbus_bench.hpp"
+#include "sim/bench/server.hpp"
 
 namespace {
 
@@ -90,15 +91,15 @@ TEST(SoftLimitsProperty, NoPositionOutsideTheSoftLimitsIsEverWritten) {
   int accepted = 0, refused = 0;
   for (int k = 0; k < profiles; ++k) {
     const motion::DriveProfile p = random_profile(rng);
-    sim::BenchSimConfig sim_config;
+    sim::bench::BenchSimConfig sim_config;
     sim_config.require_homing = false;
     sim_config.time_scale = 50;
-    for (sim::AxisConfig* a : {&sim_config.x, &sim_config.y}) {
+    for (sim::bench::AxisConfig* a : {&sim_config.x, &sim_config.y}) {
       a->travel_min_mm = -1e9;  // the drive would go anywhere: only the driver protects
       a->travel_max_mm = 1e9;
       a->initial_mm = 0;
     }
-    sim::BenchServer server(p, sim_config);
+    sim::bench::BenchServer server(p, sim_config);
     server.start();
     motion::ModbusBench bench(motion::BenchUrl::parse(server.url()), p);
     const double count_mm = 1 / p.counts_per_mm;

@@ -12,11 +12,11 @@
 #include <cmath>
 #include <cstdlib>
 #include <map>
-#include <motion/errors.hpp>
 #include <regex>
 #include <thread>
 
 #include "child_process.hpp"
+#include "motion/errors.hpp"
 #include "sim_bench_fixture.hpp"
 
 namespace {

@@ -19,7 +19,7 @@ RigRun run_rig(const std::string& args, const std::string& stdin_text) {
   const fs::path input = fs::temp_directory_path() / ("rig_test_stdin_" + tag);
   const fs::path errors = fs::temp_directory_path() / ("rig_test_stderr_" + tag);
   std::ofstream(input) << stdin_text;
-  const std::string command = std::string(RIG_BINARY_DIR) + "/rig/rig " + args + " < " +
+  const std::string command = std::string(RIG_BINARY_DIR) + "/bin/rig " + args + " < " +
                               input.string() + " 2> " + errors.string();
   RigRun r;
   if (FILE* pipe = ::popen(command.c_str(), "r")) {

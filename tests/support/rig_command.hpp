@@ -11,7 +11,7 @@ struct RigRun {
   std::string err;     // standard error
 };
 
-// Runs `<build>/rig/rig ARGS` through the shell with `stdin_text` on its
+// Runs `<build>/bin/rig ARGS` through the shell with `stdin_text` on its
 // standard input; stdout and stderr are captured apart.
 RigRun run_rig(const std::string& args, const std::string& stdin_text = "");
 

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <random>
 
-#include "db/store.hpp"
+#include "db/store/store.hpp"
 
 namespace rig_test {
 
@@ -48,8 +48,8 @@ double synthetic_bound(const SyntheticRunSpec& spec, double d) {
 
 namespace {
 
-db::RunDescription description(const SyntheticRunSpec& spec) {
-  db::RunDescription d;
+db::store::RunDescription description(const SyntheticRunSpec& spec) {
+  db::store::RunDescription d;
   d.config_json = "{\"frames_per_position\":" + std::to_string(spec.frames_per_position) +
                   ",\"synthetic\":true}";
   // The plan is the positions' true distances: two specs with different
@@ -78,9 +78,9 @@ std::array<double, 9> rotation_x(double angle_rad) {
 }  // namespace
 
 SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec& spec) {
-  db::StoreOptions options;
+  db::store::StoreOptions options;
   options.durable_commits = spec.durable_commits;
-  db::Store store(path, options);
+  db::store::Store store(path, options);
   SyntheticRun out;
   out.run_id = store.start_run(description(spec));
   std::mt19937_64 rng(spec.seed);
@@ -88,7 +88,7 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   const int ok_positions = spec.positions - spec.failed_positions;
   for (int i = 0; i < spec.positions; ++i) {
-    db::PositionRecord p;
+    db::store::PositionRecord p;
     p.plan_index = i;
     const double d = synthetic_true_distance(spec, i);
     p.commanded_x_mm = 1000.0 * d;
@@ -98,7 +98,7 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
     p.true_distance_m = d;
     p.settle_time_s = 0.2;
     if (i >= ok_positions) {
-      p.status = db::PositionStatus::kFailed;
+      p.status = db::store::PositionStatus::kFailed;
       p.failure_reason = "synthetic: bench alarm";
       p.stage_times = {{"move", 0.5}};
       store.append_position(out.run_id, p);
@@ -120,13 +120,13 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
       p.stage_times.push_back({"solve:" + s.name, 1e-6 * s.time_us * spec.frames_per_position});
     p.stage_times.push_back({"store", 0.002});
     for (int f = 0; f < spec.frames_per_position; ++f) {
-      db::FrameRecord frame;
+      db::store::FrameRecord frame;
       frame.index = f;
       frame.host_timestamp_ns = 1'700'000'000'000'000'000LL + 1'000'000'000LL * i + f;
       frame.source = "synthetic";
       for (int m = 0; m < 4; ++m) {
         if (m == 3 && d > spec.marker3_lost_beyond_m) continue;
-        db::DetectionRecord det;
+        db::store::DetectionRecord det;
         det.marker_id = m;
         const double x0 = 100.0 + 3.0 * side_px * m, y0 = 200.0;
         const double square[8] = {x0,           y0,           x0 + side_px, y0,
@@ -145,7 +145,7 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
                                            : s.frame_sd_m;
         const bool flipped = uniform(rng) < s.flip_rate;
         for (const char* scope : {"0", "target"}) {
-          db::EstimateRecord e;
+          db::store::EstimateRecord e;
           e.solver = s.name;
           e.scope = scope;
           const bool pose_marker = std::string(scope) == "0";
@@ -180,9 +180,9 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
   }
   store.record_event(out.run_id, "pause", "synthetic pause", ok_positions / 2);
   store.record_event(out.run_id, "resume", "synthetic resume", ok_positions / 2);
-  if (spec.status != db::RunStatus::kRunning) {
+  if (spec.status != db::store::RunStatus::kRunning) {
     store.finish_run(out.run_id, spec.status,
-                     spec.status == db::RunStatus::kCompleted ? "" : "synthetic end");
+                     spec.status == db::store::RunStatus::kCompleted ? "" : "synthetic end");
   }
   return out;
 }

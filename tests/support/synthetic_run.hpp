@@ -1,4 +1,4 @@
-// A synthetic sweep written through db::Store with known truth, for the
+// A synthetic sweep written through db::store::Store with known truth, for the
 // report's tests and benchmark: every solver's estimated distance is
 // slope * true + intercept + Normal(0, frame_sd) on every frame and scope, so
 // a report must recover the slope, intercept and spread it was given; corners
@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "db/records.hpp"
+#include "db/store/records.hpp"
 
 namespace rig_test {
 
@@ -63,8 +63,8 @@ struct SyntheticRunSpec {
   // infinite corner coordinate, and marker 2's visible side at plan index 1
   // is infinite.
   bool plant_nonfinite_detection = false;
-  db::RunStatus status = db::RunStatus::kCompleted;  // kRunning: left running
-  bool durable_commits = false;                      // the fixture does not need fsyncs
+  db::store::RunStatus status = db::store::RunStatus::kCompleted;  // kRunning: left running
+  bool durable_commits = false;  // the fixture does not need fsyncs
 };
 
 // The paper's four solvers with modest, distinct errors (for the tests).

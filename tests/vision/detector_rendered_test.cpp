@@ -1,4 +1,4 @@
-// The detector on frames of sim::SceneRenderer (issue 3, §6): the paper's
+// The detector on frames of sim::scene::SceneRenderer (issue 3, §6): the paper's
 // camera (736x571, its intrinsics and distortion) and sheet (5 cm markers),
 // the pose marker at 0.10-1.00 m anywhere in the image, tilt up to 40 degrees,
 // the renderer's realistic optics and sensor (blur 0.6 px, vignetting,
@@ -12,7 +12,7 @@
 #include <string>
 
 #include "detector_frames.hpp"
-#include "sim/scene_renderer.hpp"
+#include "sim/scene/renderer.hpp"
 #include "vision/detector.hpp"
 
 namespace {
@@ -42,7 +42,7 @@ struct Tally {
 
 // A detection "explains" a truth marker when the ids agree and the corners
 // lie within 2 px (RMS): far above any sub-pixel error, far below a marker.
-void tally_frame(const sim::RenderedFrame& frame, const vision::Pose& T,
+void tally_frame(const sim::scene::RenderedFrame& frame, const vision::Pose& T,
                  const vision::Target& target, const std::vector<vision::Detection>& detections,
                  Tally* t) {
   std::vector<bool> explained(detections.size(), false);
@@ -107,12 +107,12 @@ class DetectorRendered : public ::testing::Test {
         target_(vision::Target::paper_default()),
         detector_(camera_, codebook_) {}
 
-  Tally run(const sim::SceneOptions& options, int frames, uint64_t seed) const {
-    const sim::SceneRenderer renderer(camera_, target_, codebook_, options);
+  Tally run(const sim::scene::SceneOptions& options, int frames, uint64_t seed) const {
+    const sim::scene::SceneRenderer renderer(camera_, target_, codebook_, options);
     const auto poses = detector_test::sample_poses(camera_, frames, seed);
     Tally t;
     for (int i = 0; i < frames; ++i) {
-      const sim::RenderedFrame frame = renderer.render(poses[i], seed * 100000 + i);
+      const sim::scene::RenderedFrame frame = renderer.render(poses[i], seed * 100000 + i);
       tally_frame(frame, poses[i], target_, detector_.detect(frame.image), &t);
     }
     return t;
@@ -127,7 +127,7 @@ class DetectorRendered : public ::testing::Test {
 // Issue 3 §6: detection rate >= 99.5 %. 500 frames hold ~1,400 detectable
 // markers, so the bound allows 7 misses.
 TEST_F(DetectorRendered, DetectsAtLeast99Point5PercentOfVisibleMarkers) {
-  const Tally t = run(sim::SceneOptions{}, 500, 11);
+  const Tally t = run(sim::scene::SceneOptions{}, 500, 11);
   ASSERT_GT(t.detectable, 1000);
   const double rate = static_cast<double>(t.found) / t.detectable;
   RecordProperty("detectable", t.detectable);
@@ -142,7 +142,7 @@ TEST_F(DetectorRendered, DetectsAtLeast99Point5PercentOfVisibleMarkers) {
 // be off by more than 0.5 px (a corner placed from the wrong edge would be
 // off by pixels).
 TEST_F(DetectorRendered, CornerRmsIsWithinTheTargetInEveryDistanceClass) {
-  const Tally t = run(sim::SceneOptions{}, 300, 12);
+  const Tally t = run(sim::scene::SceneOptions{}, 300, 12);
   for (int c = 0; c < 3; ++c) {
     ASSERT_GT(t.corners[c], 50) << detector_test::distance_class_name(c);
     const double rms = std::sqrt(t.sum_sq[c] / t.corners[c]);
@@ -157,7 +157,7 @@ TEST_F(DetectorRendered, CornerRmsIsWithinTheTargetInEveryDistanceClass) {
 // frame set the three measurement markers of the sheet leave the image at
 // close range, so there are hundreds of cut markers.
 TEST_F(DetectorRendered, MarkersCutByTheImageBorderAreNotDetected) {
-  const Tally t = run(sim::SceneOptions{}, 150, 13);
+  const Tally t = run(sim::scene::SceneOptions{}, 150, 13);
   ASSERT_GT(t.cut, 50);
   EXPECT_EQ(t.cut_detected, 0) << "of " << t.cut << " cut markers";
   EXPECT_EQ(t.false_detections, 0);
@@ -170,7 +170,7 @@ TEST_F(DetectorRendered, MarkersCutByTheImageBorderAreNotDetected) {
 // be detected, but then its corners must be as good as an unoccluded
 // marker's (0.07 px), and such near misses are rare (<= 1 %).
 TEST_F(DetectorRendered, OccludedMarkersAreRejectedNotMisCornered) {
-  sim::SceneOptions o;
+  sim::scene::SceneOptions o;
   o.occluders = 2;
   const Tally t = run(o, 200, 14);
   ASSERT_GT(t.occluded, 150);
@@ -185,7 +185,7 @@ TEST_F(DetectorRendered, OccludedMarkersAreRejectedNotMisCornered) {
 // levels of noise on the paper, three times the default): Canny's smoothing
 // keeps the outlines closed, and the corners stay within the target.
 TEST_F(DetectorRendered, NoisySensorKeepsDetectionAndCornerAccuracy) {
-  sim::SceneOptions o;
+  sim::scene::SceneOptions o;
   o.full_well_electrons = 3000;
   o.read_noise_electrons = 30;
   const Tally t = run(o, 150, 17);
@@ -195,7 +195,7 @@ TEST_F(DetectorRendered, NoisySensorKeepsDetectionAndCornerAccuracy) {
 // Heavier defocus (PSF sigma 1.5 px instead of 0.6): the symmetric blur
 // widens the edges but does not move them; the corners stay within the target.
 TEST_F(DetectorRendered, HeavierBlurKeepsDetectionAndCornerAccuracy) {
-  sim::SceneOptions o;
+  sim::scene::SceneOptions o;
   o.blur_sigma_px = 1.5;
   const Tally t = run(o, 150, 18);
   expect_issue_targets(t);
@@ -215,11 +215,11 @@ TEST_F(DetectorRendered, MarkerOnASheetCutAtItsQuietZoneKeepsItsAccuracy) {
   alone.sheet_origin_m = Eigen::Vector2d(-half, -half);
   alone.quiet_cells = 1;
   alone.validate();
-  const sim::SceneRenderer renderer(camera_, alone, codebook_);
+  const sim::scene::SceneRenderer renderer(camera_, alone, codebook_);
   const auto poses = detector_test::sample_poses(camera_, 200, 20);
   Tally t;
   for (int i = 0; i < 200; ++i) {
-    const sim::RenderedFrame frame = renderer.render(poses[i], 2000000 + i);
+    const sim::scene::RenderedFrame frame = renderer.render(poses[i], 2000000 + i);
     tally_frame(frame, poses[i], alone, detector_.detect(frame.image), &t);
   }
   ASSERT_GT(t.detectable, 150);
@@ -235,7 +235,7 @@ TEST_F(DetectorRendered, HalfResolutionCandidatesGiveTheSameCornersAsFullResolut
   vision::DetectorParameters full;
   full.candidate_decimation = 1;
   const vision::Detector paper(camera_, codebook_, full);
-  const sim::SceneRenderer renderer(camera_, target_, codebook_);
+  const sim::scene::SceneRenderer renderer(camera_, target_, codebook_);
   const auto poses = detector_test::sample_poses(camera_, 80, 19);
   int both = 0, only_one = 0;
   for (int i = 0; i < 80; ++i) {
@@ -259,10 +259,10 @@ TEST_F(DetectorRendered, HalfResolutionCandidatesGiveTheSameCornersAsFullResolut
 // (rectangles, quadrilaterals, ellipses, lines, checker patches) at the
 // default setting.
 TEST_F(DetectorRendered, ClutterOnlyFramesGiveNoDetections) {
-  sim::SceneOptions o;
+  sim::scene::SceneOptions o;
   o.show_target = false;
   o.clutter_shapes = 40;
-  const sim::SceneRenderer renderer(camera_, target_, codebook_, o);
+  const sim::scene::SceneRenderer renderer(camera_, target_, codebook_, o);
   const auto poses = detector_test::sample_poses(camera_, 1000, 15);
   int false_detections = 0, candidates = 0;
   for (int i = 0; i < 1000; ++i) {
@@ -279,7 +279,7 @@ TEST_F(DetectorRendered, ClutterOnlyFramesGiveNoDetections) {
 
 // Clutter around the sheet does not hide markers nor add detections.
 TEST_F(DetectorRendered, ClutterAroundTheSheetAddsNoDetections) {
-  sim::SceneOptions o;
+  sim::scene::SceneOptions o;
   o.clutter_shapes = 40;
   const Tally t = run(o, 150, 16);
   EXPECT_EQ(t.false_detections, 0);

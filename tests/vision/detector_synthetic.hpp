@@ -1,7 +1,7 @@
 // A small, independent ray-casting renderer of a target sheet for the detector
 // tests: per sub-pixel ray through the inverse lens model, ray-plane
 // intersection, point lookup of the artwork, box average of ss x ss sub-pixels,
-// Gaussian blur, Gaussian noise. Slower and simpler than sim::SceneRenderer;
+// Gaussian blur, Gaussian noise. Slower and simpler than sim::scene::SceneRenderer;
 // it lets the detector's geometry be checked against a second, independent
 // implementation of the image formation.
 #pragma once

@@ -1,0 +1,322 @@
+// db::report::Report: the document a run database exists for (issue 7): how far each
+// solver is from the truth, at which distance, and whether this run is better
+// or worse than a baseline. From one run of a run database it computes
+//  - the paper's study (Maidi et al. 2010, §3), per solver and per scope
+//    (the pose marker alone, scope "<its id>", "0" by default; "target":
+//    every detected marker):
+//    reconstruction (reprojection) error (Table 2, Fig. 8), generalization
+//    error (Table 3, Fig. 9), the regression estimated = a * true + b with
+//    asymptotic standard errors (Table 4), residual RMS and variance
+//    (Table 5), mean error, variance, standard deviation and time per pose
+//    (Table 6), the ten distance classes over [0.10, 1.00] m (Fig. 11) and
+//    estimated against true distance with the fit (Fig. 12), the paper's own
+//    values beside ours;
+//  - beyond the paper: Deming errors-in-variables regression, jitter against
+//    bias, planar ambiguity and flips against distance and viewing angle,
+//    efficiency (variance over the Cramér-Rao bound), detection rate and
+//    corner quality against marker size, convergence failures, stage times;
+//  - with a baseline, every figure beside the baseline's and the differences
+//    that exceed their statistical uncertainty,
+// and writes it as report.html (self-contained, SVG inline), report.json
+// (every figure's numbers) and CSV tables.
+//
+// Units: distances and distance errors in metres (error = estimated - true),
+// image errors in pixels, times in microseconds (solvers) or seconds (stages),
+// angles in degrees.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "db/stats/compare.hpp"
+#include "db/stats/descriptive.hpp"
+#include "db/stats/eiv.hpp"
+#include "db/stats/regression.hpp"
+#include "db/store/records.hpp"
+
+namespace db::report {
+
+// The input of a report is unusable: the file is missing, not a rig run
+// database, of a newer (or older) schema, holds no completed run, or the
+// requested run does not exist. The message names the file (and run) and
+// what was expected. `rig report` exits with 2.
+class ReportInputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ReportOptions {
+  // The run to report; unset: the most recent completed run of the file.
+  // A run named here may also be aborted or failed (the page says so), but
+  // not still running.
+  std::optional<std::int64_t> run_id;
+  // An IPPE-family estimate counts as ambiguous when its ambiguity_ratio
+  // (reprojection error of the better planar solution over that of the
+  // worse, in [0, 1]) is at least this: at 0.8 the wrong solution explains
+  // the corners within 25 % of the right one's error, i.e. well inside the
+  // spread that corner noise gives two fits of the same frame. Lower: more
+  // estimates called ambiguous (the rate rises towards 1 at long range);
+  // higher: only near-ties.
+  double ambiguity_ratio_threshold = 0.8;
+  // A flip: the pose marker's rotation (scope "0") differs from the whole
+  // target's rotation (scope "target") of the same solver and frame by more
+  // than this angle, degrees. A planar flip mirrors the marker about the line
+  // of sight and moves its normal by about twice the viewing angle (tens of
+  // degrees), while corner noise moves a 5 cm marker's rotation by a few
+  // degrees at 1 m; 20 degrees separates the two. Lower: noise counted as
+  // flips at long range; higher: flips near frontal views missed.
+  double flip_angle_deg = 20.0;
+  // Standard deviation of the true distance's random error from position to
+  // position (the bench read-back's repeatability), metres: the x error of
+  // the Deming regression, whose error variance ratio is delta = (jitter of
+  // the estimates)^2 / this^2. 50 um is the repeatability of a ball-screw
+  // bench with an encoder read-back; an error of the rig geometry is the same
+  // for every position (it moves the intercept, not the points) and does not
+  // belong here. Smaller: Deming tends to ordinary least squares; larger:
+  // towards the inverse regression. If it exceeds the residual sd of the fit,
+  // the data contradict it (the points would scatter at least that much).
+  double true_distance_sd_m = 0.00005;
+  // Run comparison: a difference is flagged when |difference| > k * its
+  // standard error (db::stats::compare_means). 3 flags a true non-change
+  // 0.27 % of the time per figure.
+  double significance_k = 3.0;
+  // Fig. 12 draws at most this many positions per solver (every n-th by plan
+  // index); the fit always uses every estimate. Larger: heavier page.
+  std::size_t max_points_per_series = 300;
+};
+
+// One of the ten distance classes of one solver and scope.
+struct DistanceClassStudy {
+  double lower_m = 0, upper_m = 0;
+  stats::Summary error_m;            // estimated - true, every used estimate (Fig. 11)
+  stats::Summary reprojection_px;    // Fig. 8
+  stats::Summary generalization_px;  // Fig. 9 (scope "0" only; count 0 otherwise)
+  // Jitter and bias: with s_p^2 the variance of the distance over the frames
+  // of position p and n_p its used frames, jitter = sqrt(sum (n_p-1) s_p^2 /
+  // sum (n_p-1)) (pooled within-position sd); bias = mean over positions of
+  // (mean_p - true_p), bias_sd its spread over positions. NaN when no
+  // position has two used frames (jitter) or none at all (bias).
+  std::size_t positions = 0;
+  double jitter_m = 0, bias_m = 0, bias_sd_m = 0;
+  // Efficiency = jitter^2 / (sigma_corner^2 * mean bound^2) pooled as
+  // sum (n_p-1) s_p^2 / sum (n_p-1) sigma^2 b_p^2, with b_p the position's
+  // Cramér-Rao distance bound (m/px) for this scope and sigma the class's
+  // corner noise (ClassCornerNoise). 1 is an efficient estimator; NaN when
+  // bounds or corner noise were not recorded.
+  double efficiency = 0;
+  std::size_t ambiguity_checked = 0, ambiguous = 0;  // converged estimates with an ambiguity ratio
+  std::size_t flip_checked = 0, flips = 0;           // frames with both scopes (scope "0" only)
+};
+
+// Counts by viewing-angle class, for ambiguity and flips.
+struct AngleClassStudy {
+  double lower_deg = 0, upper_deg = 0;
+  std::size_t ambiguity_checked = 0, ambiguous = 0;
+  std::size_t flip_checked = 0, flips = 0;
+};
+
+// One position's means over its used frames (run comparison pairs them by
+// plan index).
+struct PositionMeans {
+  std::int64_t plan_index = 0;
+  double abs_error_m = 0;        // mean |estimated - true|
+  double reprojection_px = 0;    // mean reprojection error
+  double generalization_px = 0;  // mean generalization error; NaN when absent
+};
+
+// Everything about one solver on one scope.
+struct SolverStudy {
+  std::string solver, scope;
+  std::size_t estimates = 0;  // rows in the run
+  std::size_t skipped = 0;    // solver not applicable to the scope ("skipped"/"not_applicable")
+  std::size_t failed = 0;     // applicable but not converged
+  std::size_t used = 0;       // converged with a known true distance: the accuracy figures
+  std::map<std::string, std::size_t> failures_by_termination;
+  stats::Summary reprojection_px;     // Table 2
+  stats::Summary generalization_px;   // Table 3 (scope "0")
+  stats::Summary error_m;             // Table 6: estimated - true
+  stats::Summary abs_error_m;         // |estimated - true|
+  stats::Summary relative_error_pct;  // 100 |estimated - true| / true (the paper's "0.81 %")
+  stats::Summary time_us;             // every applicable estimate (Table 6)
+  // Per-position means (one number per position, independent across
+  // positions, unlike frames of one position): what run comparison tests.
+  stats::Summary position_abs_error_m, position_reprojection_px, position_generalization_px;
+  std::vector<PositionMeans> per_position;        // by plan index
+  std::optional<stats::LineFit> ols;              // estimated = a * true + b (Tables 4, 5)
+  std::optional<stats::EivFit> deming;            // same line, Deming (errors in both variables)
+  double deming_delta = 0;                        // the error variance ratio it used
+  std::vector<DistanceClassStudy> classes;        // the ten classes, empty ones included
+  std::vector<AngleClassStudy> by_viewing_angle;  // 0-90 degrees in 10 degree classes
+  std::size_t ambiguity_checked = 0, ambiguous = 0, flip_checked = 0, flips = 0;
+  // Fig. 12: per-position mean estimated against true distance (thinned).
+  std::vector<double> plot_true_m, plot_estimated_m;
+};
+
+// Corner noise per distance class: pooled within-position standard
+// deviation of each detected corner coordinate over the frames of a
+// position, sqrt(sum (n-1) s^2 / sum (n-1)) over positions, markers and the
+// 8 coordinates, px; NaN with fewer than two frames per position.
+struct ClassCornerNoise {
+  double lower_m = 0, upper_m = 0;
+  double sigma_px = 0;
+  std::size_t dof = 0;
+};
+
+// Detection against the marker's projected side length at the true pose.
+struct MarkerSizeClass {
+  double lower_px = 0, upper_px = 0;
+  std::size_t expected = 0;  // visible marker x frame
+  std::size_t detected = 0;  // of those, detected in the frame
+  stats::Summary edge_fit_residual_px;
+  double corner_jitter_px = 0;  // pooled within-position sd of the corners, px (NaN: < 2 frames)
+};
+
+struct StageStudy {
+  std::string stage;
+  stats::Summary seconds;
+  double median_s = 0, p95_s = 0;
+};
+
+// One compared figure of one solver and scope.
+struct ComparedFigure {
+  std::string solver, scope;
+  std::string figure;  // "mean |distance error| (m)", ...
+  double candidate = 0, baseline = 0;
+  stats::Difference difference;
+  // Whether the figure is one where larger is worse and counts towards a
+  // regression: errors and failure rates (times depend on the machine, the
+  // line parameters have no "worse" side: they are flagged, not counted).
+  bool counted = false;
+  // The threshold of the regression verdict: k raised by Bonferroni's
+  // correction over the m counted figures of the comparison, so that the
+  // chance that a run from the baseline's distributions is called
+  // "regressed" is at most that of one comparison at k (0.27 % at k = 3):
+  // two-sided P(|T| > regression_k) = P(|z| > k) / m, with T Student's t of
+  // the figure's degrees of freedom (difference.dof: n - 1 for a paired mean
+  // over n positions, Welch's for unpaired means) or normal when infinite.
+  double regression_k = 0;
+  // A counted figure significantly larger than the baseline's by
+  // regression_k / smaller by it.
+  bool worse = false;
+  bool better = false;
+};
+
+struct RunStudy {
+  std::string database;  // path as given
+  store::Run run;
+  std::size_t positions = 0, failed_positions = 0, frames = 0;
+  // Measured positions with no true distance or one outside the ten classes
+  // (more than 5 mm outside [0.10, 1.00] m): in the fits, not in the classes.
+  std::size_t positions_outside_classes = 0;
+  std::size_t estimates = 0;
+  std::vector<SolverStudy> solvers;  // sorted by solver, then scope ("0" before "target")
+  std::vector<ClassCornerNoise> corner_noise;
+  std::vector<MarkerSizeClass> marker_sizes;  // empty when visible markers were not recorded
+  bool visible_markers_recorded = false;
+  // Left out of every detection figure because of a non-finite value (a
+  // detector or simulator bug): detections with a non-finite corner
+  // coordinate or edge-fit residual (not counted as detected), and visible
+  // markers (marker x position) with a non-finite projected side length.
+  std::size_t nonfinite_detections = 0, nonfinite_visible_markers = 0;
+  bool distance_bounds_recorded = false;
+  bool viewing_angles_recorded = false;
+  std::vector<StageStudy> stages;
+  std::vector<store::RunEvent> events;
+  ReportOptions options;
+
+  // nullptr when the run has no such solver and scope.
+  const SolverStudy* find(const std::string& solver, const std::string& scope) const;
+};
+
+// "DB[:RUN]" of --baseline: the path and, when the text ends in ":<digits>",
+// the run id. Throws ReportInputError for an empty path.
+struct RunReference {
+  std::string database;
+  std::optional<std::int64_t> run_id;
+  static RunReference parse(const std::string& text);
+};
+
+// Loads the run and computes its study. Opens the file read-only (never
+// creates or migrates it). Throws ReportInputError for unusable input (see
+// above); StoreError for a failure while reading.
+RunStudy study_run(const std::string& database, const ReportOptions& options);
+
+// Whether the two runs ran the same plan: their run descriptions' plan_json
+// are identical text (the plan's positions in plan-index order), so that plan
+// index i is the same commanded position in both and the runs' per-position
+// errors can be paired. Two plans that differ only in formatting count as
+// different (Welch is used then: valid, only less sensitive).
+bool same_plan_of(const RunStudy& candidate, const RunStudy& baseline);
+
+// Every figure of `candidate` against `baseline`, for the solvers and scopes
+// both have: mean |distance error|, mean reprojection and generalization error
+// (per-position means: paired by plan index when the runs ran the same plan,
+// see same_plan_of, and share at least two measured positions, the mean
+// difference over its standard error, which removes the spread of the errors
+// over distance from the comparison; else Welch on the two runs'
+// per-position means, the figure's name saying why), failure rate (pooled
+// two-proportion standard error), OLS slope and intercept, mean time per pose, and per distance
+// class the bias (mean over positions of their mean error; shown, not
+// counted). difference.significant uses k; worse and better the
+// family-wise regression_k.
+// k is a threshold in standard errors, a quantile of the standard normal
+// distribution (k = 3: two-sided tail 0.27 %); regression_k is the normal
+// quantile of that tail divided by the number of counted figures.
+// Precondition: k > 0 and finite; throws stats::StatsError otherwise.
+std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStudy& baseline,
+                                         double k);
+
+// True when some counted figure of a comparison got significantly worse
+// (ComparedFigure::worse): the verdict of Report::regressed and of
+// report.json's "regressed".
+bool regressed(const std::vector<ComparedFigure>& comparison);
+
+// The paper's own values for a solver (DESIGN.md "Paper facts", Tables 2-6),
+// for "analytic", "hybrid_oi", "ekf", "hybrid_ekf"; nullopt for others.
+struct PaperValues {
+  std::string label;  // the paper's column heading, e.g. "H. EKF"
+  double reprojection_mean_px, reprojection_variance, reprojection_sd_px;        // Table 2
+  double generalization_mean_px, generalization_variance, generalization_sd_px;  // Table 3
+  double slope, slope_se, intercept_m, intercept_se_m;                           // Table 4
+  double residual_rms_m, residual_variance;                                      // Table 5
+  double mean_error_m, error_variance, error_sd_m, time_us;                      // Table 6
+  double time_per_pose_us;  // DESIGN.md "Paper facts": per pose, Pentium III 1.1 GHz
+};
+std::optional<PaperValues> paper_values(const std::string& solver);
+
+// What Report::write produced.
+struct ReportFiles {
+  std::string html, json;
+  std::vector<std::string> csv;
+};
+
+class Report {
+ public:
+  // Computes the study of `database` (see study_run); with a baseline, also
+  // the baseline's study and the comparison.
+  Report(const std::string& database, const ReportOptions& options,
+         const std::optional<RunReference>& baseline = std::nullopt);
+
+  const RunStudy& study() const { return study_; }
+  const std::optional<RunStudy>& baseline() const { return baseline_; }
+  const std::vector<ComparedFigure>& comparison() const { return comparison_; }
+  // True when some solver got significantly worse than the baseline.
+  bool regressed() const;
+
+  // Writes report.html, report.json and the CSV tables into directory
+  // out_dir (created if missing). Throws std::runtime_error naming the file
+  // when one cannot be written.
+  ReportFiles write(const std::string& out_dir) const;
+
+ private:
+  RunStudy study_;
+  std::optional<RunStudy> baseline_;
+  std::vector<ComparedFigure> comparison_;
+};
+
+}  // namespace db::report

@@ -1,0 +1,92 @@
+// db::report::Report: study, comparison and the three outputs (see db/report.hpp).
+#include "db/report/report.hpp"
+
+#include <cctype>
+#include <filesystem>
+#include <fstream>
+
+#include "report_data.hpp"
+#include "report_document.hpp"
+#include "report_study.hpp"
+
+namespace db::report {
+
+const SolverStudy* RunStudy::find(const std::string& solver, const std::string& scope) const {
+  for (const SolverStudy& s : solvers) {
+    if (s.solver == solver && s.scope == scope) return &s;
+  }
+  return nullptr;
+}
+
+RunReference RunReference::parse(const std::string& text) {
+  RunReference ref;
+  ref.database = text;
+  const std::size_t colon = text.rfind(':');
+  if (colon != std::string::npos && colon + 1 < text.size() && colon + 19 > text.size()) {
+    bool digits = true;
+    for (std::size_t i = colon + 1; i < text.size(); ++i)
+      digits &= std::isdigit(static_cast<unsigned char>(text[i])) != 0;
+    if (digits) {
+      ref.database = text.substr(0, colon);
+      ref.run_id = std::stoll(text.substr(colon + 1));
+    }
+  }
+  if (ref.database.empty()) {
+    throw ReportInputError("baseline \"" + text + "\": no database path; expected DB or DB:RUN");
+  }
+  return ref;
+}
+
+RunStudy study_run(const std::string& database, const ReportOptions& options) {
+  return report::compute_study(report::load_run(database, options.run_id), options);
+}
+
+Report::Report(const std::string& database, const ReportOptions& options,
+               const std::optional<RunReference>& baseline)
+    : study_(study_run(database, options)) {
+  if (baseline) {
+    ReportOptions baseline_options = options;
+    baseline_options.run_id = baseline->run_id;
+    baseline_ = study_run(baseline->database, baseline_options);
+    comparison_ = compare_runs(study_, *baseline_, options.significance_k);
+  }
+}
+
+bool Report::regressed() const {
+  return db::report::regressed(comparison_);
+}
+
+namespace {
+
+void write_file(const std::filesystem::path& path, const std::string& content) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out << content;
+  out.close();
+  if (!out) throw std::runtime_error(path.string() + ": cannot write the report file");
+}
+
+}  // namespace
+
+ReportFiles Report::write(const std::string& out_dir) const {
+  const std::filesystem::path dir(out_dir);
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec || !std::filesystem::is_directory(dir)) {
+    throw std::runtime_error(out_dir + ": cannot create the output directory" +
+                             (ec ? " (" + ec.message() + ")" : std::string()));
+  }
+  const report::ReportInput input{study_, baseline_, comparison_};
+  const report::Document document = report::build_document(input);
+  ReportFiles files;
+  files.html = (dir / "report.html").string();
+  write_file(files.html, report::render_html(document));
+  files.json = (dir / "report.json").string();
+  write_file(files.json, report::render_json(document, input));
+  for (const auto& [name, content] : report::render_csv(document)) {
+    files.csv.push_back((dir / name).string());
+    write_file(files.csv.back(), content);
+  }
+  return files;
+}
+
+}  // namespace db::report

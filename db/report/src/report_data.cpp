@@ -1,0 +1,362 @@
+#include "report_data.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+#include <utility>
+
+#include "db/report/report.hpp"
+#include "db/store/sqlite.hpp"
+#include "db/store/store.hpp"
+
+namespace db::report {
+
+const char* const kEstimatesQuery =
+    "SELECT p.plan_index, f.frame_index, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
+    "e.r12, e.r20, e.r21, e.r22, e.distance_m, e.reprojection_error_px, "
+    "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio "
+    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN estimates e ON e.frame_id = f.id "
+    "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
+
+const char* const kDetectionsQuery =
+    "SELECT p.plan_index, f.frame_index, d.marker_id, d.a_x_px, d.a_y_px, d.b_x_px, d.b_y_px, "
+    "d.c_x_px, d.c_y_px, d.d_x_px, d.d_y_px, d.edge_fit_residual_px "
+    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN detections d ON d.frame_id = f.id "
+    "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
+
+const char* const kFramesQuery =
+    "SELECT p.plan_index, count(f.id) FROM positions p JOIN frames f ON f.position_id = p.id "
+    "WHERE p.run_id = ?1 GROUP BY p.plan_index ORDER BY p.plan_index";
+
+double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<double, 9>& R_b) {
+  // trace(R_a^T R_b) = sum_ij R_a[i][j] R_b[i][j]; angle = acos((trace - 1) / 2).
+  double trace = 0;
+  for (int i = 0; i < 9; ++i)
+    trace += R_a[i] * R_b[i];
+  const double c = std::clamp(0.5 * (trace - 1.0), -1.0, 1.0);
+  return std::acos(c) * 180.0 / M_PI;
+}
+
+namespace {
+
+bool is_skipped(const std::string& termination) {
+  return termination == "skipped" || termination == "not_applicable";
+}
+
+// The run to report, chosen inside the read transaction: its id and status
+// by direct queries (no run's stored files are read to choose one).
+std::int64_t pick_run(store::sqlite::Connection& connection, const std::string& database,
+                      std::optional<std::int64_t> run_id) {
+  if (run_id) {
+    store::sqlite::Statement status(connection, "SELECT status FROM runs WHERE id = ?1");
+    status.bind(1, *run_id);
+    if (status.step()) {
+      if (status.get_text(0) == store::to_string(store::RunStatus::kRunning)) {
+        throw ReportInputError(database + ": run " + std::to_string(*run_id) +
+                               " is still running; expected a completed, aborted or failed run");
+      }
+      return *run_id;
+    }
+    std::string known;
+    store::sqlite::Statement ids(connection, "SELECT id FROM runs ORDER BY id");
+    while (ids.step())
+      known += (known.empty() ? "" : ", ") + std::to_string(ids.get_int64(0));
+    throw ReportInputError(database + ": no run " + std::to_string(*run_id) +
+                           " (runs: " + (known.empty() ? "none" : known) + ")");
+  }
+  store::sqlite::Statement latest(connection,
+                                  "SELECT id FROM runs WHERE status = ?1 ORDER BY id DESC LIMIT 1");
+  latest.bind(1, store::to_string(store::RunStatus::kCompleted));
+  if (latest.step()) return latest.get_int64(0);
+  store::sqlite::Statement count(connection, "SELECT count(*) FROM runs");
+  count.step();
+  throw ReportInputError(database + ": no completed run (" + std::to_string(count.get_int64(0)) +
+                         " run(s), none completed); finish a sweep first or name one with --run");
+}
+
+// A deferred read transaction on a read-only connection: its snapshot is
+// taken at the first read and holds until commit (or destruction).
+class ReadTransaction {
+ public:
+  explicit ReadTransaction(store::sqlite::Connection& connection) : connection_(connection) {
+    connection_.exec("BEGIN");
+  }
+  ~ReadTransaction() {
+    if (open_) sqlite3_exec(connection_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
+  }
+  ReadTransaction(const ReadTransaction&) = delete;
+  ReadTransaction& operator=(const ReadTransaction&) = delete;
+  void commit() {
+    connection_.exec("COMMIT");
+    open_ = false;
+  }
+
+ private:
+  store::sqlite::Connection& connection_;
+  bool open_ = true;
+};
+
+// The slot in RunData::positions of a plan index met by a pass; every pass
+// reads the snapshot the slots came from, so a miss means the file is
+// inconsistent (a row of frames without its position).
+class Slots {
+ public:
+  Slots(const std::string& database, std::int64_t run_id) : database_(database), run_id_(run_id) {}
+  void add(std::int64_t plan_index, std::uint32_t slot) { slot_of_.emplace(plan_index, slot); }
+  std::uint32_t at(std::int64_t plan_index, const char* table) const {
+    const auto it = slot_of_.find(plan_index);
+    if (it == slot_of_.end()) {
+      throw store::StoreError(database_ + ": run " + std::to_string(run_id_) + " has " + table +
+                              " at plan index " + std::to_string(plan_index) +
+                              " but no such position; expected every row to belong to a stored "
+                              "position (is the file damaged?)");
+    }
+    return it->second;
+  }
+
+ private:
+  std::string database_;
+  std::int64_t run_id_;
+  std::unordered_map<std::int64_t, std::uint32_t> slot_of_;
+};
+
+// Per position: the corners of each marker over its frames.
+struct CornerSeries {
+  std::vector<std::array<double, 8>> corners;
+  stats::RunningSummary edge;
+};
+
+void flush_markers(std::map<int, CornerSeries>& series, PositionData& position) {
+  for (auto& [id, s] : series) {
+    MarkerAtPosition m;
+    m.marker_id = id;
+    m.frames_detected = s.corners.size();
+    m.edge_fit_residual_px = s.edge.summary();
+    double side = 0;
+    for (const auto& c : s.corners) {
+      for (int k = 0; k < 4; ++k) {
+        const int n = (k + 1) % 4;
+        side += std::hypot(c[2 * n] - c[2 * k], c[2 * n + 1] - c[2 * k + 1]);
+      }
+    }
+    m.side_px = side / (4.0 * static_cast<double>(s.corners.size()));
+    if (s.corners.size() >= 2) {
+      for (int k = 0; k < 8; ++k) {
+        double mean = 0;
+        for (const auto& c : s.corners)
+          mean += c[k];
+        mean /= static_cast<double>(s.corners.size());
+        for (const auto& c : s.corners)
+          m.corner_sum_squares += (c[k] - mean) * (c[k] - mean);
+        m.corner_dof += s.corners.size() - 1;
+      }
+    }
+    position.markers.push_back(m);
+  }
+  series.clear();
+}
+
+}  // namespace
+
+RunData load_run(const std::string& database, std::optional<std::int64_t> run_id) {
+  RunData data;
+  data.database = database;
+  store::StoreOptions options;
+  options.read_only = true;
+  std::optional<store::Store> store;
+  try {
+    store.emplace(database, options);
+  } catch (const store::StoreError& e) {
+    // Missing, not SQLite, another program's, newer or older schema: input
+    // the user must fix, not a failure of this program.
+    throw ReportInputError(e.what());
+  }
+
+  // One snapshot: every read of the run's rows is made in one read
+  // transaction of this connection, so a sweep resumed or appending while
+  // the report reads cannot make the passes disagree. The run's description
+  // and its position records are read through the Store (its own
+  // connection) after the snapshot began: positions are append-only and
+  // immutable once written, so the Store sees a superset of the snapshot's
+  // positions and keeping those of the snapshot gives exactly the snapshot's
+  // records; the run's mutable columns (status, reason, end) are taken from
+  // the snapshot.
+  store::sqlite::Connection connection(database, SQLITE_OPEN_READONLY);
+  connection.exec("PRAGMA query_only = ON");
+  ReadTransaction transaction(connection);
+  const std::int64_t id = pick_run(connection, database, run_id);
+  {
+    store::sqlite::Statement state(
+        connection, "SELECT status, status_reason, ended_at FROM runs WHERE id = ?1");
+    state.bind(1, id);
+    state.step();
+    data.run = store->run(id);
+    data.run.status = store::run_status_from_text(database, state.get_text(0));
+    data.run.status_reason = state.get_text(1);
+    data.run.ended_at = state.get_optional_text(2);
+  }
+  Slots slots(database, id);
+  {
+    std::vector<std::int64_t> snapshot_indices;
+    store::sqlite::Statement indices(connection,
+                                     "SELECT plan_index FROM positions WHERE run_id = ?1 "
+                                     "ORDER BY plan_index");
+    indices.bind(1, id);
+    while (indices.step())
+      snapshot_indices.push_back(indices.get_int64(0));
+    std::size_t next = 0;
+    for (store::PositionRecord& p : store->positions(id)) {
+      if (next == snapshot_indices.size() || p.plan_index != snapshot_indices[next]) continue;
+      ++next;
+      slots.add(p.plan_index, static_cast<std::uint32_t>(data.positions.size()));
+      PositionData pd;
+      pd.record = std::move(p);
+      data.positions.push_back(std::move(pd));
+    }
+    if (next != snapshot_indices.size()) {
+      throw store::StoreError(database + ": run " + std::to_string(id) +
+                              ": position at plan index " + std::to_string(snapshot_indices[next]) +
+                              " disappeared while the report read it; expected positions to be "
+                              "append-only");
+    }
+  }
+  store.reset();
+  {
+    store::sqlite::Statement events(connection,
+                                    "SELECT at, plan_index, kind, message FROM run_events "
+                                    "WHERE run_id = ?1 ORDER BY id");
+    events.bind(1, id);
+    while (events.step()) {
+      data.events.push_back(store::RunEvent{events.get_text(0), events.get_optional_int64(1),
+                                            events.get_text(2), events.get_text(3)});
+    }
+  }
+
+  {
+    store::sqlite::Statement frames(connection, kFramesQuery);
+    frames.bind(1, id);
+    while (frames.step())
+      data.positions[slots.at(frames.get_int64(0), "frames")].frames =
+          static_cast<std::size_t>(frames.get_int64(1));
+  }
+
+  {
+    std::map<std::pair<std::string, std::string>, std::size_t> key_index;
+    std::vector<SolverScopeData> solvers;
+    // Rotations of the current frame by solver: [0] the pose marker's scope
+    // (a marker id, "0" by default), [1] "target".
+    struct FrameRotations {
+      bool has[2] = {false, false};
+      std::array<double, 9> R[2];
+    };
+    std::map<std::string, FrameRotations> frame_rotations;
+    std::int64_t current_plan = -1;
+    std::int64_t current_frame = -1;
+    std::uint32_t current_slot = 0;
+    auto flush_frame = [&] {
+      for (auto& [solver, fr] : frame_rotations) {
+        if (fr.has[0] && fr.has[1]) {
+          data.flips[solver].push_back({current_slot, rotation_angle_deg(fr.R[0], fr.R[1])});
+        }
+        fr.has[0] = fr.has[1] = false;
+      }
+    };
+
+    store::sqlite::Statement select(connection, kEstimatesQuery);
+    select.bind(1, id);
+    std::string solver, scope;
+    while (select.step()) {
+      const std::int64_t plan = select.get_int64(0);
+      const std::int64_t frame = select.get_int64(1);
+      if (plan != current_plan || frame != current_frame) {
+        flush_frame();
+        if (plan != current_plan) current_slot = slots.at(plan, "estimates");
+        current_plan = plan;
+        current_frame = frame;
+      }
+      solver = select.get_text(2);
+      scope = select.get_text(3);
+      auto [it, inserted] = key_index.try_emplace({solver, scope}, solvers.size());
+      if (inserted) solvers.push_back(SolverScopeData{solver, scope, {}, {}});
+      SolverScopeData& target = solvers[it->second];
+
+      EstimateSample s;
+      s.position = current_slot;
+      s.distance_m = select.get_double(13);
+      s.reprojection_px = select.get_double(14);
+      if (!select.is_null(15)) s.generalization_px = select.get_double(15);
+      s.time_us = select.get_double(18);
+      if (!select.is_null(19)) s.ambiguity_ratio = select.get_double(19);
+      // A converged estimate must have a finite distance and reprojection
+      // error; one that does not is a solver bug, counted as a failure under
+      // its own name rather than poisoning every mean of the report.
+      const bool finite = std::isfinite(s.distance_m) && std::isfinite(s.reprojection_px);
+      const bool converged = select.get_int(16) != 0 && finite;
+      if (!std::isfinite(s.generalization_px)) s.generalization_px = kNaN;
+      if (!std::isfinite(s.time_us)) s.time_us = kNaN;
+      if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
+      if (select.get_int(16) != 0 && !finite) {
+        s.status = SampleStatus::kFailed;
+        ++target.failures_by_termination["converged with a non-finite value"];
+      } else if (converged) {
+        s.status = SampleStatus::kConverged;
+        const int which = scope == "target" ? 1 : 0;
+        {
+          FrameRotations& fr = frame_rotations[solver];
+          fr.has[which] = true;
+          for (int k = 0; k < 9; ++k)
+            fr.R[which][k] = select.get_double(4 + k);
+        }
+      } else {
+        const std::string termination = select.get_text(17);
+        if (is_skipped(termination)) {
+          s.status = SampleStatus::kSkipped;
+        } else {
+          s.status = SampleStatus::kFailed;
+          ++target.failures_by_termination[termination];
+        }
+      }
+      target.samples.push_back(s);
+    }
+    flush_frame();
+    for (const auto& [key, index] : key_index)
+      data.solvers.push_back(std::move(solvers[index]));  // map order: by solver, then scope
+  }
+
+  {
+    store::sqlite::Statement select(connection, kDetectionsQuery);
+    select.bind(1, id);
+    std::map<int, CornerSeries> series;
+    std::int64_t current_plan = -1;
+    while (select.step()) {
+      const std::int64_t plan = select.get_int64(0);
+      if (plan != current_plan) {
+        if (current_plan >= 0)
+          flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
+        current_plan = plan;
+      }
+      std::array<double, 8> c;
+      bool finite = true;
+      for (int k = 0; k < 8; ++k) {
+        c[k] = select.get_double(3 + k);
+        finite = finite && std::isfinite(c[k]);
+      }
+      const double edge = select.get_double(11);
+      if (!finite || !std::isfinite(edge)) {
+        ++data.nonfinite_detections;
+        continue;
+      }
+      CornerSeries& s = series[select.get_int(2)];
+      s.corners.push_back(c);
+      s.edge.add(edge);
+    }
+    if (current_plan >= 0)
+      flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
+  }
+  transaction.commit();
+  return data;
+}
+
+}  // namespace db::report

@@ -1,0 +1,218 @@
+// report.json: the study's numbers (per solver and scope, per class), the
+// comparison, and every figure's series and every table of the page, so that
+// anything on the page can be re-plotted or checked by a program. NaN (an
+// undefined figure) is written as null.
+#include <nlohmann/json.hpp>
+
+#include "report_document.hpp"
+
+namespace db::report {
+namespace {
+
+using nlohmann::json;
+
+json to_json(const stats::Summary& s) {
+  return {{"count", s.count}, {"mean", s.mean}, {"variance", s.variance},
+          {"sd", s.sd},       {"min", s.min},   {"max", s.max}};
+}
+
+json to_json(const SolverStudy& s) {
+  json j{{"solver", s.solver},
+         {"scope", s.scope},
+         {"estimates", s.estimates},
+         {"skipped", s.skipped},
+         {"failed", s.failed},
+         {"used", s.used},
+         {"failures_by_termination", s.failures_by_termination},
+         {"reprojection_px", to_json(s.reprojection_px)},
+         {"generalization_px", to_json(s.generalization_px)},
+         {"error_m", to_json(s.error_m)},
+         {"abs_error_m", to_json(s.abs_error_m)},
+         {"relative_error_pct", to_json(s.relative_error_pct)},
+         {"time_us", to_json(s.time_us)},
+         {"position_abs_error_m", to_json(s.position_abs_error_m)},
+         {"position_reprojection_px", to_json(s.position_reprojection_px)},
+         {"position_generalization_px", to_json(s.position_generalization_px)},
+         {"ambiguity_checked", s.ambiguity_checked},
+         {"ambiguous", s.ambiguous},
+         {"flip_checked", s.flip_checked},
+         {"flips", s.flips}};
+  if (s.ols) {
+    j["ols"] = {{"slope", s.ols->slope},
+                {"slope_se", s.ols->slope_se},
+                {"intercept_m", s.ols->intercept},
+                {"intercept_se_m", s.ols->intercept_se},
+                {"n", s.ols->n},
+                {"residual_sd_m", s.ols->residual_sd},
+                {"residual_variance_m2", s.ols->residual_variance},
+                {"residual_rms_m", s.ols->residual_rms},
+                {"r_squared", s.ols->r_squared}};
+  }
+  if (s.deming) {
+    j["deming"] = {{"slope", s.deming->slope},
+                   {"slope_se", s.deming->slope_se},
+                   {"intercept_m", s.deming->intercept},
+                   {"intercept_se_m", s.deming->intercept_se},
+                   {"delta", s.deming_delta}};
+  }
+  json classes = json::array();
+  for (const DistanceClassStudy& c : s.classes) {
+    classes.push_back({{"lower_m", c.lower_m},
+                       {"upper_m", c.upper_m},
+                       {"error_m", to_json(c.error_m)},
+                       {"reprojection_px", to_json(c.reprojection_px)},
+                       {"generalization_px", to_json(c.generalization_px)},
+                       {"positions", c.positions},
+                       {"jitter_m", c.jitter_m},
+                       {"bias_m", c.bias_m},
+                       {"bias_sd_m", c.bias_sd_m},
+                       {"efficiency", c.efficiency},
+                       {"ambiguity_checked", c.ambiguity_checked},
+                       {"ambiguous", c.ambiguous},
+                       {"flip_checked", c.flip_checked},
+                       {"flips", c.flips}});
+  }
+  j["classes"] = classes;
+  json angles = json::array();
+  for (const AngleClassStudy& a : s.by_viewing_angle) {
+    angles.push_back({{"lower_deg", a.lower_deg},
+                      {"upper_deg", a.upper_deg},
+                      {"ambiguity_checked", a.ambiguity_checked},
+                      {"ambiguous", a.ambiguous},
+                      {"flip_checked", a.flip_checked},
+                      {"flips", a.flips}});
+  }
+  j["by_viewing_angle"] = angles;
+  return j;
+}
+
+json to_json(const RunStudy& st) {
+  json solvers = json::array();
+  for (const SolverStudy& s : st.solvers)
+    solvers.push_back(to_json(s));
+  json corner = json::array();
+  for (const ClassCornerNoise& c : st.corner_noise)
+    corner.push_back(
+        {{"lower_m", c.lower_m}, {"upper_m", c.upper_m}, {"sigma_px", c.sigma_px}, {"dof", c.dof}});
+  json sizes = json::array();
+  for (const MarkerSizeClass& m : st.marker_sizes)
+    sizes.push_back({{"lower_px", m.lower_px},
+                     {"upper_px", m.upper_px},
+                     {"expected", m.expected},
+                     {"detected", m.detected},
+                     {"edge_fit_residual_px", to_json(m.edge_fit_residual_px)},
+                     {"corner_jitter_px", m.corner_jitter_px}});
+  json stages = json::array();
+  for (const StageStudy& s : st.stages)
+    stages.push_back({{"stage", s.stage},
+                      {"seconds", to_json(s.seconds)},
+                      {"median_s", s.median_s},
+                      {"p95_s", s.p95_s}});
+  json events = json::array();
+  for (const store::RunEvent& e : st.events)
+    events.push_back({{"at", e.at},
+                      {"plan_index", e.plan_index ? json(*e.plan_index) : json(nullptr)},
+                      {"kind", e.kind},
+                      {"message", e.message}});
+  return {{"database", st.database},
+          {"run",
+           {{"id", st.run.id},
+            {"status", to_string(st.run.status)},
+            {"status_reason", st.run.status_reason},
+            {"started_at", st.run.started_at},
+            {"ended_at", st.run.ended_at ? json(*st.run.ended_at) : json(nullptr)},
+            {"plan_size", st.run.description.plan_size},
+            {"software_version", st.run.description.software_version},
+            {"host", st.run.description.host}}},
+          {"positions", st.positions},
+          {"failed_positions", st.failed_positions},
+          {"positions_outside_classes", st.positions_outside_classes},
+          {"frames", st.frames},
+          {"estimates", st.estimates},
+          {"viewing_angles_recorded", st.viewing_angles_recorded},
+          {"distance_bounds_recorded", st.distance_bounds_recorded},
+          {"visible_markers_recorded", st.visible_markers_recorded},
+          {"nonfinite_detections", st.nonfinite_detections},
+          {"nonfinite_visible_markers", st.nonfinite_visible_markers},
+          {"solvers", solvers},
+          {"corner_noise", corner},
+          {"marker_sizes", sizes},
+          {"stages", stages},
+          {"events", events}};
+}
+
+json to_json(const svg::Axis& a) {
+  return {{"label", a.label}, {"unit", a.unit}, {"log", a.log}};
+}
+
+}  // namespace
+
+std::string render_json(const Document& document, const ReportInput& in) {
+  const ReportOptions& o = in.study.options;
+  json root{{"format", "rig-report/1"},
+            {"options",
+             {{"ambiguity_ratio_threshold", o.ambiguity_ratio_threshold},
+              {"flip_angle_deg", o.flip_angle_deg},
+              {"true_distance_sd_m", o.true_distance_sd_m},
+              {"significance_k", o.significance_k}}},
+            {"study", to_json(in.study)}};
+  if (in.baseline) root["baseline"] = to_json(*in.baseline);
+  json comparison = json::array();
+  for (const ComparedFigure& f : in.comparison) {
+    comparison.push_back({{"solver", f.solver},
+                          {"scope", f.scope},
+                          {"figure", f.figure},
+                          {"candidate", f.candidate},
+                          {"baseline", f.baseline},
+                          {"difference", f.difference.difference},
+                          {"standard_error", f.difference.standard_error},
+                          {"z", f.difference.z},
+                          {"significant", f.difference.significant},
+                          {"counted", f.counted},
+                          {"regression_k", f.regression_k},
+                          {"worse", f.worse},
+                          {"better", f.better}});
+  }
+  root["comparison"] = comparison;
+  root["regressed"] = regressed(in.comparison);
+  json figures = json::array();
+  json tables = json::array();
+  for (const Section& section : document.sections) {
+    for (const Block& b : section.blocks) {
+      if (b.kind == Block::Kind::kFigure) {
+        json series = json::array();
+        for (const svg::Series& s : b.figure.series)
+          series.push_back({{"label", s.label},
+                            {"x", s.x},
+                            {"y", s.y},
+                            {"y_error", s.y_error},
+                            {"dashed", s.dashed}});
+        figures.push_back({{"id", b.figure.id},
+                           {"section", section.id},
+                           {"title", b.figure.title},
+                           {"caption", b.figure.caption},
+                           {"x", to_json(b.figure.x)},
+                           {"y", to_json(b.figure.y)},
+                           {"series", series}});
+      } else if (b.kind == Block::Kind::kTable) {
+        json rows = json::array();
+        for (const auto& row : b.table.rows) {
+          json r = json::array();
+          for (const html::Cell& c : row)
+            r.push_back(c.text);
+          rows.push_back(r);
+        }
+        tables.push_back({{"id", b.table.id},
+                          {"section", section.id},
+                          {"caption", b.table.caption},
+                          {"header", b.table.header},
+                          {"rows", rows}});
+      }
+    }
+  }
+  root["figures"] = figures;
+  root["tables"] = tables;
+  return root.dump(1);
+}
+
+}  // namespace db::report

@@ -1,0 +1,71 @@
+// rig marker: one coded marker at true physical size, to print.
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "commands.hpp"
+#include "vision/artwork.hpp"
+#include "vision/codebook.hpp"
+
+namespace rig::cli {
+
+void add_marker_command(CLI::App& app, ExitStatus& status) {
+  auto* cmd = app.add_subcommand(
+      "marker", "Write one coded marker at true physical size as SVG, PDF or PNG (by extension)");
+  auto args = std::make_shared<vision::MarkerArtworkOptions>();
+  auto id = std::make_shared<int>(0);
+  auto out = std::make_shared<std::string>();
+  auto no_label = std::make_shared<bool>(false);
+  cmd->add_option("--id", *id, "codebook id (0 .. 34 with the default codebook)")->required();
+  cmd->add_option("--size-mm", args->side_mm,
+                  "outer side of the black border, mm (the marker is 6 x 6 cells)")
+      ->capture_default_str();
+  cmd->add_option("--out", *out, "output file: .svg, .pdf or .png")->required();
+  cmd->add_option("--dpi", args->dpi, "PNG resolution, pixels per inch")->capture_default_str();
+  cmd->add_option("--quiet-cells", args->quiet_cells,
+                  "white margin around the border, in cells (side / 6)")
+      ->capture_default_str();
+  cmd->add_flag("--no-label", *no_label, "do not print the id and size in the margin");
+  cmd->footer(
+      "Example: rig marker --id 0 --size-mm 50 --out marker0.pdf\n"
+      "Print at 100 % (actual size), never 'fit to page', and check the side with a ruler.");
+  cmd->callback([&status, args, id, out, no_label] {
+    args->label = !*no_label;
+    const vision::Codebook codebook;
+    // Bad input (exit 2) is told apart from a failure to write (exit 1) by
+    // checking the input first.
+    try {
+      vision::artwork_format_from_path(*out);
+      if (*id < 0 || static_cast<size_t>(*id) >= codebook.size()) {
+        throw vision::ArtworkError("--id " + std::to_string(*id) + ": expected 0 .. " +
+                                   std::to_string(codebook.size() - 1));
+      }
+      if (!(args->side_mm > 0) || args->quiet_cells < 0 ||
+          !(args->dpi >= 10 && args->dpi <= 4800)) {
+        throw vision::ArtworkError(
+            "--size-mm must be > 0, --quiet-cells >= 0 and --dpi in 10 .. 4800 (got " +
+            std::to_string(args->side_mm) + ", " + std::to_string(args->quiet_cells) + ", " +
+            std::to_string(args->dpi) + ")");
+      }
+    } catch (const vision::ArtworkError& e) {
+      std::cerr << "rig marker: " << e.what() << "\n";
+      status.code = kExitBadInput;
+      return;
+    }
+    try {
+      vision::write_marker_artwork(codebook, *id, *args, *out);
+    } catch (const vision::ArtworkError& e) {
+      std::cerr << "rig marker: " << e.what() << "\n";
+      status.code = kExitFailure;
+      return;
+    }
+    const double page_mm =
+        args->side_mm * (vision::kMarkerCells + 2 * args->quiet_cells) / vision::kMarkerCells;
+    std::cout << "wrote marker id " << *id << " (code 0x" << std::hex << codebook.code(*id)
+              << std::dec << "), " << args->side_mm << " mm, page " << page_mm << " x " << page_mm
+              << " mm, to " << *out << "\n";
+    status.code = kExitOk;
+  });
+}
+
+}  // namespace rig::cli

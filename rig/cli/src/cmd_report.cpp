@@ -1,0 +1,113 @@
+// rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression] --out DIR:
+// the regression report of one run of a run database (issue 7): report.html
+// (self-contained, printable), report.json (every figure's numbers) and one
+// CSV file per table, in DIR.
+//
+// Exit codes: 0 written; 1 a failure while reading or writing; 2 bad input
+// (missing file, not a rig database, newer or older schema, no completed run,
+// no such run); 3 with --fail-on-regression: written, and some solver got
+// significantly worse than the baseline (for CI of products that depend on
+// the solvers).
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "commands.hpp"
+#include "db/report/report.hpp"
+#include "db/store/store.hpp"
+
+namespace rig::cli {
+namespace {
+
+constexpr int kExitRegression = 3;
+
+struct ReportArgs {
+  std::string database;
+  std::optional<std::int64_t> run_id;
+  std::string baseline;
+  bool fail_on_regression = false;
+  std::string out_dir;
+  db::report::ReportOptions options;
+};
+
+int run_report(const ReportArgs& a) {
+  try {
+    db::report::ReportOptions options = a.options;
+    options.run_id = a.run_id;
+    std::optional<db::report::RunReference> baseline;
+    if (!a.baseline.empty()) baseline = db::report::RunReference::parse(a.baseline);
+    const db::report::Report report(a.database, options, baseline);
+    const db::report::ReportFiles files = report.write(a.out_dir);
+    const db::report::RunStudy& s = report.study();
+    std::cout << "run " << s.run.id << " of " << a.database << ": " << s.positions << " positions, "
+              << s.estimates << " estimates\n"
+              << files.html << "\n"
+              << files.json << "\n"
+              << files.csv.size() << " CSV tables in " << a.out_dir << "\n";
+    if (report.baseline()) {
+      std::size_t worse = 0;
+      for (const db::report::ComparedFigure& f : report.comparison()) {
+        if (!f.worse) continue;
+        ++worse;
+        std::cout << "worse: " << f.solver << " scope " << f.scope << ": " << f.figure << " "
+                  << f.candidate << " against " << f.baseline << " (z = " << f.difference.z
+                  << ")\n";
+      }
+      std::cout << (worse == 0 ? "no solver significantly worse than the baseline\n"
+                               : std::to_string(worse) + " figure(s) significantly worse\n");
+      if (worse > 0 && a.fail_on_regression) return kExitRegression;
+    }
+    return kExitOk;
+  } catch (const db::report::ReportInputError& e) {
+    std::cerr << "rig report: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    std::cerr << "rig report: " << e.what() << "\n";
+    return kExitFailure;
+  }
+}
+
+}  // namespace
+
+void add_report_command(CLI::App& app, ExitStatus& status) {
+  auto args = std::make_shared<ReportArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "report",
+      "Regression report of a run: HTML with SVG figures, JSON and CSV (paper Tables 2-6, "
+      "Figs. 8-12, and beyond)");
+  cmd->add_option("DB", args->database, "Run database written by rig sweep")->required();
+  cmd->add_option("--run", args->run_id, "Run id (default: the latest completed run)");
+  cmd->add_option("--baseline", args->baseline,
+                  "Compare with this run: DB or DB:RUN (default run: its latest completed one)");
+  cmd->add_flag("--fail-on-regression", args->fail_on_regression,
+                "Exit with 3 when a solver got significantly worse than the baseline");
+  cmd->add_option("--out", args->out_dir, "Output directory (created if missing)")->required();
+  cmd->add_option("--ambiguity-threshold", args->options.ambiguity_ratio_threshold,
+                  "Ambiguity ratio (better/worse planar solution error) from which an "
+                  "estimate counts as ambiguous")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--flip-angle", args->options.flip_angle_deg,
+                  "Pose-marker vs whole-target rotation difference that counts as a flip, deg")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 180.0));
+  cmd->add_option(
+         "--true-distance-sd", args->options.true_distance_sd_m,
+         "Random error of the true distance (bench read-back repeatability) for the Deming "
+         "regression, m")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--k", args->options.significance_k,
+                  "Differences are significant beyond k standard errors")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->footer(
+      "Exit codes: 0 written, 1 failure, 2 bad input, 3 regression (with --fail-on-regression).\n"
+      "Example: rig report runs.db --out report/\n"
+      "         rig report runs.db --run 7 --baseline main.db:3 --fail-on-regression --out "
+      "report/");
+  cmd->callback([&status, args] { status.code = run_report(*args); });
+}
+
+}  // namespace rig::cli

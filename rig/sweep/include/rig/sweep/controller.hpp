@@ -1,0 +1,93 @@
+// rig::sweep::Controller: the sweep (issue 6 §2, §4). For each plan position the run
+// does not have yet, in plan order: move, wait_settled, trigger and grab N
+// frames, detect, run every solver on the pose marker and on the whole
+// target, compute the truth from the bench's READ-BACK position and the rig
+// geometry, store the position in one transaction, publish it.
+//
+// The controller knows the bench and the camera only through motion::Bench
+// and vision::FrameSource, the database only through db::store::Store.
+//
+// Faults (the policy is the sweep file's [faults]):
+//   bench alarm or emergency stop   stop the bench, record, then pause (until
+//                                   `rig ctl resume`, which resets the alarm
+//                                   and retries the position) or abort
+//   bench link lost                 the driver reconnects by itself; if it
+//                                   gives up, retry the position up to
+//                                   link_retries times, then the run fails
+//   settle timeout, camera timeout, the position is stored as failed with its
+//   incomplete frames, bench moved  reason and the sweep continues; after
+//   during the exposure             max_consecutive_failed of them, abort
+//   abort requested (rig ctl abort, the current position is finished and
+//   SIGINT/SIGTERM via ControlState) stored, then the run ends aborted
+// Whatever happens, every stored position is whole (db::store::Store) and the run can
+// be resumed from its first missing position (`rig sweep --resume`).
+//
+// A frame is only taken after wait_settled: a frame the source delivered
+// with a host time before the bench was settled is discarded (a free-running
+// source), and the read-back is checked again after the last frame; if the
+// bench moved by more than the profile's position tolerance meanwhile, the
+// frames are rejected and taken again (up to capture_retries times).
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+#include <string>
+
+#include "db/store/store.hpp"
+#include "motion/bench.hpp"
+#include "rig/sweep/sweep_config.hpp"
+#include "rig/telemetry/telemetry.hpp"
+#include "vision/frame_measurement.hpp"
+#include "vision/frame_source.hpp"
+
+namespace rig::sweep {
+
+// How a run ended, as stored.
+struct RunOutcome {
+  db::store::RunStatus status = db::store::RunStatus::kCompleted;
+  std::string reason;             // empty when completed
+  std::int64_t positions_ok = 0;  // stored in this session
+  std::int64_t positions_failed = 0;
+  std::int64_t stored_total = 0;  // positions the run has now (all sessions)
+};
+
+class Controller {
+ public:
+  // plan: the run's plan (for a resumed run, the stored one). The run must
+  // exist in `store` and be running. telemetry may be null. Every argument is
+  // kept by reference and must outlive the Controller.
+  Controller(const SweepConfig& config, const SweepPlan& plan, motion::Bench& bench,
+             vision::FrameSource& camera, db::store::Store& store, std::int64_t run_id,
+             telemetry::ControlState& control, telemetry::TelemetryPublisher* telemetry);
+  ~Controller();
+
+  // Measures every position the run does not have, then finishes the run in
+  // the store (completed, aborted or failed with a reason) and publishes
+  // run_stop. Returns how it ended. Exceptions other than the faults above
+  // (a database that cannot be written) finish the run as failed when the
+  // database allows it, then propagate.
+  RunOutcome run();
+
+  // Also hands every telemetry message to `observer` (on the controller's
+  // thread), e.g. for the progress bar of `rig sweep`. Call before run().
+  void set_observer(std::function<void(const nlohmann::json&)> observer);
+
+  // Thread-safe snapshot for the control socket's `status`:
+  // {"state", "run_id", "completed", "plan_size", "current_index", "eta_s"}.
+  nlohmann::json status() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// What rig stores per frame, from what the measurer found.
+db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& measurement,
+                                       int frame_index);
+
+}  // namespace rig::sweep

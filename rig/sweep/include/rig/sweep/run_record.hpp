@@ -1,0 +1,42 @@
+// What a run database holds about a sweep besides its positions (issue 6 §3):
+// the run's description (the sweep file and every file it names as stored
+// copies with their SHA-256, the resolved configuration, the plan, software
+// and library versions, host), and the checks a resume makes against it.
+#pragma once
+
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+#include "db/store/records.hpp"
+#include "db/store/store.hpp"
+#include "rig/sweep/sweep_config.hpp"
+#include "rig/sweep/sweep_plan.hpp"
+
+namespace rig::sweep {
+
+// A resume or replay that cannot go on: the message names the run, the file
+// and what differs.
+class RunMismatch : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The run's description. Reads the files the config names (the calibration
+// may be "" = the built-in paper camera, stored as an empty file). Throws
+// SweepConfigError if a file cannot be read.
+db::store::RunDescription describe_run(
+    const SweepConfig& config, const SweepPlan& plan,
+    const nlohmann::json& extra_config = nlohmann::json::object());
+
+// {"opencv": "4.6.0", "aravis": ..., "libmodbus": ..., "sqlite": ..., "zeromq": ..., "eigen": ...}
+nlohmann::json library_versions();
+
+// For `rig sweep --resume RUN`: the run's stored plan, after checking that
+// every file the config read has the SHA-256 the run stored (a resumed run
+// must measure with what it started with). Throws RunMismatch naming the
+// file that changed, or the run's status if it is completed; PlanError if the
+// stored plan is damaged; SweepConfigError if a file cannot be read.
+SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config);
+
+}  // namespace rig::sweep

@@ -1,0 +1,186 @@
+// rig::sweep::SweepConfig: everything one sweep needs, read from a sweep file (TOML,
+// config/sweeps/*.toml) and validated completely before the bench moves.
+//
+// Sweep file format. Tables and keys not listed are errors (a misspelt key
+// must never fall back to a default); keys marked (required) must be present.
+// Relative paths are relative to the sweep file's folder. Lengths in mm,
+// times in ms.
+//
+//   [plan]                      exactly one kind; the keys of another kind are errors
+//   kind = "grid"               (required) "grid" | "csv" | "paper"
+//   x_mm = [0, 900, 15]         grid (required): [min, max, step]; paper: [min, max],
+//   y_mm = [100, 200, 50]         default the bench profile's soft limits
+//   serpentine = true           grid: reverse every other row (default true)
+//   file = "../plans/x.csv"     csv (required): header "x_mm,y_mm", one "X,Y" per line
+//
+//   [capture]
+//   camera = "gige:127.0.0.1"   (required) gige:ADDRESS|gige:ID|v4l2:PATH|replay:DIR
+//   calibration = ""            (required) calibration file; "" = the paper's Sony XC-555
+//   frames_per_position = 3     1..1000 (default 3); N > 1 separates jitter from bias
+//   software_trigger = true     default true (one exposure per trigger, after settling)
+//   pixel_format = "Mono8"      Mono8 | Mono10 | Mono12 | Mono16 (default Mono8)
+//   exposure_us = 10000         > 0; absent keeps the camera's value
+//   gain = 0                    >= 0, camera units (dB); absent keeps the camera's value
+//   grab_timeout_ms = 2000      > 0 (default 2000): wait for one frame
+//   retries = 2                 0..100 (default 2): re-triggers after a timeout or an
+//                               incomplete frame before the position is marked failed
+//   save_frames = ""            folder for raw frames as PNG; "" = do not save (default)
+//
+//   [bench]
+//   url = "modbus-tcp://127.0.0.1:1502"   (required) motion/bench_url.hpp
+//   profile = "../benches/sim.toml"       (required) drive profile
+//   speed_mm_s = 100            (0, profile max]; absent = the profile's default speed
+//   home_first = true           home the bench before the first move (default true)
+//
+//   [settle]
+//   timeout_ms = 25000          > 0; wait_settled timeout per move (default: the
+//                               profile's settle_timeout_ms)
+//   dwell_ms = 0                >= 0 (default 0): extra wait after settling
+//
+//   [faults]
+//   on_alarm = "pause"          "pause" | "abort" (default "pause")
+//   max_consecutive_failed = 5  1..1000000 (default 5): then the run is aborted
+//   link_retries = 3            0..100 (default 3): reconnects after a bench link drop
+//
+//   [target]
+//   layout = "../targets/paper.toml"      (required) vision/target.hpp
+//
+//   [rig]                       exactly one of:
+//   file = "../rigs/sim.toml"   a rig file (vision/rig_geometry.hpp), or inline tables
+//   [rig.camera_mount]          offset_mm = [x, y, z], misalignment_deg = [rx, ry, rz]
+//   [rig.target]                origin_mm = [x, y, z], tilt_deg = [rx, ry, rz]
+//
+//   [database]
+//   path = "../../out/ci/run.db"          (required) `rig sweep --db` overrides
+//   durable_commits = true      fsync every position (default true)
+//
+//   [telemetry]
+//   publish = "tcp://127.0.0.1:5556"      PUB endpoint (default as shown)
+//   control = "tcp://127.0.0.1:5557"      REP endpoint (default as shown), != publish
+//   allow_remote = false        false: endpoints must be loopback (127.x, localhost)
+//
+// Consistency checks: every plan position inside the profile's soft limits;
+// the speed at most the profile's max; the target in front of the camera
+// (z_cam > 0) at every position; the settle timeout longer than the plan's
+// longest move at the speed (distance / speed, a lower bound that ignores
+// acceleration, from the home position when home_first); publish != control;
+// every named file exists and parses (its own error is quoted).
+#pragma once
+
+#include <chrono>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "motion/drive_profile.hpp"
+#include "rig/sweep/sweep_plan.hpp"
+#include "vision/camera.hpp"
+#include "vision/frame_source.hpp"
+#include "vision/rig_geometry.hpp"
+#include "vision/target.hpp"
+
+namespace rig::sweep {
+
+// A sweep file that cannot be used. The message names the sweep file, the key
+// and its value as written, and what was expected:
+//   "/abs/ci.toml: capture.frames_per_position = 0: expected an integer in 1..1000"
+//   "/abs/ci.toml: bench.url: missing; expected a bench URL modbus-tcp://HOST:PORT ..."
+// Errors of the files it names (profile, calibration, layout, rig, CSV plan)
+// are wrapped: the message names the sweep file and key, then quotes the cause.
+class SweepConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct SettlePolicy {
+  // wait_settled timeout per move (default: the profile's settle_timeout_ms).
+  // Longer rides out slow long moves; shorter reports a stuck axis sooner.
+  std::chrono::milliseconds timeout{25000};
+  // Extra wait after the bench reports settled, before the first trigger.
+  // Lets vibration of a long camera arm die out; adds to every position.
+  std::chrono::milliseconds dwell{0};
+};
+
+enum class AlarmAction { kPause, kAbort };
+
+struct FaultPolicy {
+  // Bench alarm: stop, record, then pause (wait for `rig ctl resume`) or abort.
+  AlarmAction on_alarm = AlarmAction::kPause;
+  // Re-triggers after a camera timeout or an incomplete frame before the
+  // position is marked failed; also how many frames stamped before the bench
+  // settled are discarded, and how many times the frames are taken again
+  // when the read-back moved during the exposures, before the position fails.
+  int capture_retries = 2;
+  // How long one grab waits for its frame.
+  std::chrono::milliseconds grab_timeout{2000};
+  // Failed positions in a row after which the run is aborted (something is
+  // structurally wrong: camera unplugged, target fallen over).
+  int max_consecutive_failed_positions = 5;
+  // Bench link drop: reconnect attempts (each within the profile's reconnect
+  // timeout) before the run fails.
+  int link_retries = 3;
+};
+
+struct SweepConfig {
+  std::string sweep_file;       // absolute path of the file read
+  std::string sweep_file_text;  // its bytes (stored in the run)
+  SweepPlan plan;
+  // Frames taken at each position, 1..1000. N > 1 separates the estimate's
+  // jitter (spread over the N frames) from its bias; each frame adds a
+  // trigger-to-frame time (~exposure + transfer) per position.
+  int frames_per_position = 3;
+  // Move speed, mm/s, in (0, profile max]; unset = the profile's default.
+  // Faster sweeps; slower moves ring less and settle sooner.
+  std::optional<double> speed_mm_s;
+  // Home the bench before the first move. false skips homing (which takes
+  // minutes on some drives) when the bench is known to be homed; the first
+  // move then starts wherever the bench stands.
+  bool home_first = true;
+  SettlePolicy settle;
+  FaultPolicy faults;
+  std::string bench_url;           // e.g. "modbus-tcp://127.0.0.1:1502" (validated)
+  std::string bench_profile_path;  // absolute
+  motion::DriveProfile bench_profile;
+  // e.g. "gige:127.0.0.1" (scheme validated); a replay folder is made absolute.
+  std::string camera_spec;
+  vision::CaptureOptions capture;       // capture.retries == faults.capture_retries
+  std::string camera_calibration_path;  // absolute, or "" = the paper's Sony XC-555
+  vision::Camera camera = vision::Camera::paper_default();
+  std::string target_layout_path;  // absolute
+  vision::Target target;
+  std::string rig_geometry_path;  // absolute file the geometry came from ("" if inline)
+  std::string rig_geometry_text;  // the geometry's TOML (file content, or the inline tables)
+  vision::RigGeometry geometry;
+  // Folder for raw frames as PNG, absolute; unset = frames are not saved.
+  // Saving keeps every frame for re-analysis (up to 0.4 MB per 736x571 Mono8
+  // frame) at the cost of disk and an encode per frame.
+  std::optional<std::string> frames_dir;
+  std::string database_path;                               // absolute; `rig sweep --db` overrides
+  std::string telemetry_publish = "tcp://127.0.0.1:5556";  // ZeroMQ PUB endpoint (bound)
+  std::string telemetry_control = "tcp://127.0.0.1:5557";  // ZeroMQ REP endpoint (bound)
+  // false: both endpoints must be loopback, so nobody on the network can
+  // pause or abort a run; true allows e.g. tcp://*:5556 for a remote monitor.
+  bool telemetry_allow_remote = false;
+  // fsync the database after every position: a power cut loses at most the
+  // position being measured; false is faster on slow disks but may lose the
+  // last positions (the run then resumes from an earlier one).
+  bool durable_commits = true;
+
+  // The calibration as a message names it: its path, or the built-in paper
+  // camera when capture.calibration is "".
+  std::string calibration_description() const {
+    return camera_calibration_path.empty()
+               ? "the built-in paper camera (capture.calibration = \"\")"
+               : camera_calibration_path;
+  }
+  // Every resolved value (absolute paths, defaults filled in, the plan's
+  // description and size but not its positions), for runs.config_json.
+  nlohmann::json to_json() const;
+};
+
+// Reads, resolves and validates a sweep file (format above). Throws
+// SweepConfigError naming the file, the key, the value and what was expected.
+SweepConfig load_sweep_config(const std::string& path);
+
+}  // namespace rig::sweep

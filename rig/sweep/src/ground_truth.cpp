@@ -1,0 +1,108 @@
+#include "rig/sweep/ground_truth.hpp"
+
+#include <Eigen/Geometry>
+#include <cmath>
+#include <string>
+
+#include "vision/cramer_rao.hpp"
+
+namespace rig::sweep {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+bool inside_image(const vision::Camera& camera, const Eigen::Vector2d& px) {
+  return px.x() >= 0 && px.y() >= 0 && px.x() <= camera.width_px() - 1 &&
+         px.y() <= camera.height_px() - 1;
+}
+
+// Corners of the markers projected through `pose`; false if one is behind the camera.
+bool project_corners(const vision::Camera& camera, const vision::Target& target,
+                     const std::vector<int>& ids, const vision::Pose& pose, Eigen::VectorXd& out) {
+  out.resize(8 * static_cast<Eigen::Index>(ids.size()));
+  Eigen::Index row = 0;
+  for (int id : ids) {
+    for (const auto& corner : target.corners_m(id)) {
+      const Eigen::Vector3d p = pose.R * corner + pose.t;
+      if (!(p.z() > 0)) return false;
+      out.segment<2>(row) = camera.project(p);
+      row += 2;
+    }
+  }
+  return true;
+}
+
+// Bound on sd(distance) for 1 px corner noise: the pose perturbed as
+// R' = exp([w]x) R, t' = t + v; the Jacobian of the projected corners in
+// (w, v) by central differences (steps far above rounding, far below the
+// curvature scale of a projection: 1e-7 rad and 1e-7 m); d|t|/d(w, v) =
+// (0, t/|t|).
+std::optional<double> distance_bound(const vision::Camera& camera, const vision::Target& target,
+                                     const std::vector<int>& ids, const vision::Pose& pose) {
+  Eigen::VectorXd centre;
+  if (ids.empty() || !project_corners(camera, target, ids, pose, centre)) return std::nullopt;
+  vision::PoseJacobian J(centre.size(), 6);
+  const double h = 1e-7;
+  for (int k = 0; k < 6; ++k) {
+    vision::Pose plus = pose, minus = pose;
+    Eigen::Vector3d delta = Eigen::Vector3d::Zero();
+    delta(k % 3) = h;
+    if (k < 3) {
+      plus.R = Eigen::AngleAxisd(h, delta / h).toRotationMatrix() * pose.R;
+      minus.R = Eigen::AngleAxisd(-h, delta / h).toRotationMatrix() * pose.R;
+    } else {
+      plus.t += delta;
+      minus.t -= delta;
+    }
+    Eigen::VectorXd a, b;
+    if (!project_corners(camera, target, ids, plus, a) ||
+        !project_corners(camera, target, ids, minus, b))
+      return std::nullopt;
+    J.col(k) = (a - b) / (2 * h);
+  }
+  vision::PoseGradient g = vision::PoseGradient::Zero();
+  g.tail<3>() = pose.t / pose.t.norm();
+  try {
+    return std::sqrt(vision::cramer_rao_bound(vision::cramer_rao_bound(J, 1.0), g));
+  } catch (const vision::CramerRaoError&) {
+    return std::nullopt;  // e.g. one marker seen edge-on: the pose is not observable
+  }
+}
+
+}  // namespace
+
+GroundTruth ground_truth_at(const vision::RigGeometry& geometry, const vision::Camera& camera,
+                            const vision::Target& target, double x_mm, double y_mm) {
+  GroundTruth truth;
+  truth.T_cam_target = geometry.T_cam_target(x_mm, y_mm);
+  const vision::Pose& T = truth.T_cam_target;
+  truth.distance_m = T.t.norm();
+  const Eigen::Vector3d normal = T.R.col(2);  // target z, into the sheet, in camera axes
+  const double cosine = std::abs(normal.dot(-T.t)) / truth.distance_m;
+  truth.viewing_angle_deg = std::acos(std::min(1.0, cosine)) * 180.0 / kPi;
+
+  std::vector<int> in_view;
+  for (const auto& marker : target.markers) {
+    Eigen::VectorXd px;
+    if (!project_corners(camera, target, {marker.id}, T, px)) continue;
+    bool inside = true;
+    double side = 0;
+    for (int k = 0; k < 4; ++k) {
+      inside = inside && inside_image(camera, px.segment<2>(2 * k));
+      side += (px.segment<2>(2 * k) - px.segment<2>(2 * ((k + 1) % 4))).norm() / 4;
+    }
+    if (!inside) continue;
+    in_view.push_back(marker.id);
+    truth.visible_markers.push_back({marker.id, side});
+  }
+  for (int id : in_view) {
+    if (id != target.pose_marker_id) continue;
+    if (auto bound = distance_bound(camera, target, {id}, T))
+      truth.distance_bounds.push_back({std::to_string(id), *bound});
+  }
+  if (auto bound = distance_bound(camera, target, in_view, T))
+    truth.distance_bounds.push_back({"target", *bound});
+  return truth;
+}
+
+}  // namespace rig::sweep

@@ -1,0 +1,63 @@
+// What rig stores of a frame: the measurer's detections and estimates as the
+// run database's records (db knows neither vision nor rig).
+#include <cmath>
+
+#include "rig/sweep/controller.hpp"
+
+namespace rig::sweep {
+namespace {
+
+db::store::DetectionRecord to_record(const vision::Detection& d) {
+  db::store::DetectionRecord r;
+  r.marker_id = d.id;
+  r.rotation = d.rotation;
+  for (int k = 0; k < 4; ++k) {
+    r.corners_px[2 * k] = d.corners_px[k].x();
+    r.corners_px[2 * k + 1] = d.corners_px[k].y();
+  }
+  r.contrast = d.quality.contrast;
+  r.bits_corrected = d.quality.bits_corrected;
+  r.edge_fit_residual_px = d.quality.edge_fit_residual_px;
+  return r;
+}
+
+db::store::EstimateRecord to_record(const vision::ScopeEstimate& s) {
+  const vision::Estimate& e = s.estimate;
+  db::store::EstimateRecord r;
+  r.solver = e.solver;
+  r.scope = s.scope;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      r.R_cam_target[3 * i + j] = e.T_cam_target.R(i, j);
+    r.t_cam_target_m[i] = e.T_cam_target.t(i);
+  }
+  // A solver that did not apply or failed numerically may leave NaN in the
+  // pose; the database keeps numbers, and `converged` says whether to use them.
+  for (double& v : r.R_cam_target)
+    if (!std::isfinite(v)) v = 0;
+  for (double& v : r.t_cam_target_m)
+    if (!std::isfinite(v)) v = 0;
+  r.distance_m = std::isfinite(e.distance_m) ? e.distance_m : 0;
+  r.reprojection_error_px = std::isfinite(e.reprojection_error_px) ? e.reprojection_error_px : -1;
+  r.generalization_error_px = s.generalization_error_px;
+  r.iterations = e.iterations;
+  r.converged = e.converged;
+  r.termination = e.applicable() ? vision::to_string(e.termination) : "skipped";
+  r.time_us = e.time_us;
+  r.ambiguity_ratio = e.ambiguity_ratio;
+  return r;
+}
+
+}  // namespace
+
+db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& m, int frame_index) {
+  db::store::FrameRecord f;
+  f.index = frame_index;
+  for (const auto& d : m.detections)
+    f.detections.push_back(to_record(d));
+  for (const auto& e : m.estimates)
+    f.estimates.push_back(to_record(e));
+  return f;
+}
+
+}  // namespace rig::sweep

@@ -1,0 +1,18 @@
+// The telemetry message of a stored position (rig/telemetry.hpp lists the
+// message types): bench XY, true distance, each solver's distance and errors
+// as means over the position's frames, stage times.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+
+#include "db/store/records.hpp"
+
+namespace rig::sweep {
+
+// stored: positions the run has, this one included; elapsed_s: seconds since
+// this session of the run started.
+nlohmann::json position_message(const db::store::PositionRecord& position, std::int64_t run_id,
+                                std::int64_t stored, std::int64_t plan_size, double elapsed_s);
+
+}  // namespace rig::sweep

@@ -1,0 +1,45 @@
+// The simulated rig's file (config/sim.toml): which bench, which camera, which
+// target and geometry `rig sim --config FILE` runs. Paths in it are relative
+// to the file's folder.
+//
+//   [bench]
+//   config = "benches/sim.toml"       # the bench's drive profile and [sim] table
+//   host = "127.0.0.1"                # Modbus TCP listening address
+//   port = 1502                       # 0: a free port (printed)
+//   [camera]
+//   rig = "rigs/sim.toml"             # geometry (vision/rig_geometry.hpp)
+//   target = "targets/paper.toml"     # printed sheet (vision/target.hpp)
+//   calibration = ""                  # OpenCV/ROS calibration; "" = the paper's XC-555
+//   address = "127.0.0.1"             # GigE Vision interface address
+//   serial = "RIGSIM01"               # device id "Aravis-Fake-RIGSIM01"
+//   trigger_poll_hz = 1000            # see sim::camera::CameraServerOptions
+//   nominal_exposure_us = 10000
+//   seed = 1
+// A bad file throws std::runtime_error naming the file, the key and the value.
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "sim/camera/server.hpp"
+
+namespace sim::camera {
+
+struct SimRigConfig {
+  std::string bench_config;  // path, resolved against the file's folder
+  std::string bench_host = "127.0.0.1";
+  int bench_port = 1502;
+  std::string rig_geometry;  // path
+  std::string target;        // path
+  std::string calibration;   // path, or empty for vision::Camera::paper_default()
+  CameraServerOptions camera;
+};
+
+SimRigConfig load_sim_rig_config(const std::string& path);
+
+// The camera of the configured rig (renderer with default SceneOptions),
+// reading the bench's actual position through `position`. Not started.
+std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
+                                                 BenchPositionFn position);
+
+}  // namespace sim::camera

@@ -1,0 +1,106 @@
+// sim::camera::CameraServer: a GigE Vision camera on loopback whose every frame is
+// what the camera on the simulated bench would see at the moment of exposure.
+//
+// It is Aravis's in-process GigE Vision simulator (ArvGvFakeCamera: GVCP
+// control, GVSP streaming, GenICam features), with its fill callback replaced
+// by the scene renderer: for each exposure the callback reads the bench's
+// *actual* carriage position (x_mm, y_mm) at its start, waits the exposure
+// time as a sensor integrates, reads it again at its end, turns both into
+// T_cam_target through the rig geometry and renders the target (with motion
+// blur, render_moving, if the carriage moved during the exposure). Any GigE
+// Vision client (vision::GigeSource, arv-tool-0.8, arv-viewer) sees a camera
+// "Aravis-Fake-<serial>" at the interface address.
+//
+// Honoured features: Width, Height, OffsetX, OffsetY (a region of the
+// renderer's image; the sensor size is the camera model's), PixelFormat (Mono8
+// exactly as rendered; Mono16 as DN * 257; RGB8 and the 8-bit Bayer formats
+// carry the grey image), ExposureTimeAbs (exposure duration, blur window and
+// brightness, linear relative to nominal_exposure_us), GainRaw (dB, linear
+// brightness), TriggerMode/TriggerSource=Software/TriggerSoftware, and the free
+// run frame rate.
+//
+// Threads: the fill callback runs on Aravis's camera thread, under Aravis's
+// fill mutex; the position callback is called there and must be thread-safe
+// (sim::bench::BenchServer::actual_position_mm is). Only one GigE camera can bind the
+// GVCP port (3956) of an address: one CameraServer per address at a time.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <utility>
+
+#include "sim/scene/renderer.hpp"
+#include "vision/rig_geometry.hpp"
+
+namespace sim::camera {
+
+// The carriage's actual position (x_mm, y_mm) now. Called from Aravis's
+// camera thread: must be thread-safe and quick.
+using BenchPositionFn = std::function<std::pair<double, double>()>;
+
+struct CameraServerOptions {
+  // IPv4 address (or interface name) the camera binds; loopback by default.
+  std::string interface_address = "127.0.0.1";
+  // Serial number; the device id is "Aravis-Fake-<serial>" (< 16 characters).
+  std::string serial = "RIGSIM01";
+  // How often, in Hz, the camera thread looks for a software trigger: the
+  // trigger-to-exposure delay is up to 1 / trigger_poll_hz. Higher = lower
+  // latency, more idle wake-ups (1000 Hz: 1 ms, negligible CPU).
+  double trigger_poll_hz = 1000;
+  // The exposure time (µs) at which a frame is exactly the renderer's output
+  // (its SceneOptions::exposure). Other exposures scale the signal linearly.
+  double nominal_exposure_us = 10000;
+  // Wait the exposure time in the camera thread, so that a moving bench is
+  // seen moving (motion blur) and a frame takes as long as a real one. Off
+  // renders the position at the start of the exposure only (faster tests).
+  bool real_time_exposure = true;
+  // Render noise seed: frame k uses seed + k, so a frame can be re-rendered.
+  uint64_t seed = 1;
+};
+
+class CameraServer {
+ public:
+  // The renderer is shared so that tests can render the same scene; the
+  // geometry maps bench positions to poses.
+  CameraServer(std::shared_ptr<const scene::SceneRenderer> renderer, vision::RigGeometry geometry,
+               BenchPositionFn position, CameraServerOptions options = {});
+  ~CameraServer();
+  CameraServer(const CameraServer&) = delete;
+  CameraServer& operator=(const CameraServer&) = delete;
+
+  // Binds the address and starts answering. Throws std::runtime_error naming
+  // the address when it cannot bind (another camera there, no such interface).
+  void start();
+  // Stops answering and releases the address; safe to call twice.
+  void stop();
+
+  // "Aravis-Fake-<serial>", as arv-tool-0.8 lists it; use it or address() as
+  // the gige: spec of a FrameSource.
+  std::string device_id() const { return "Aravis-Fake-" + options_.serial; }
+  const std::string& address() const { return options_.interface_address; }
+
+  // What the last frame was rendered from.
+  struct Exposure {
+    uint64_t frame_id = 0;        // the GigE frame id it was sent with
+    double x0_mm = 0, y0_mm = 0;  // carriage at the start of the exposure
+    double x1_mm = 0, y1_mm = 0;  // and at its end
+    double exposure_us = 0;
+    uint64_t seed = 0;  // render seed
+  };
+  Exposure last_exposure() const;
+  uint64_t frames_rendered() const;
+
+ private:
+  struct Impl;
+  friend struct Impl;
+  std::shared_ptr<const scene::SceneRenderer> renderer_;
+  vision::RigGeometry geometry_;
+  BenchPositionFn position_;
+  CameraServerOptions options_;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sim::camera

@@ -1,0 +1,178 @@
+#include "sim/camera/server.hpp"
+
+#include <arpa/inet.h>
+#include <arv.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <thread>
+#include <tuple>
+
+namespace sim::camera {
+
+struct CameraServer::Impl {
+  CameraServer* server = nullptr;
+  ArvGvFakeCamera* gv_camera = nullptr;
+  mutable std::mutex mutex;  // guards last
+  Exposure last;
+  std::atomic<uint64_t> frames{0};
+
+  // ArvFakeCameraFillPattern: runs on Aravis's camera thread, under its fill mutex.
+  static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain,
+                   ArvPixelFormat pixel_format) {
+    static_cast<Impl*>(data)->render_into(buffer, exposure_us, gain, pixel_format);
+  }
+
+  void render_into(ArvBuffer* buffer, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
+    const CameraServerOptions& options = server->options_;
+    const auto [x0, y0] = server->position_();
+    double x1 = x0, y1 = y0;
+    if (options.real_time_exposure) {
+      // A sensor integrates for the exposure time; the carriage keeps moving.
+      // Capped so that a silly exposure cannot stall the camera's control channel.
+      std::this_thread::sleep_for(
+          std::chrono::microseconds(std::min<guint32>(exposure_us, 2000000)));
+      std::tie(x1, y1) = server->position_();
+    }
+    const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
+    const uint64_t seed = options.seed + frame_id;
+    const vision::Pose T0 = server->geometry_.T_cam_target(x0, y0);
+    // A carriage that moved less than 1 µm during the exposure is static: the
+    // blur would be far below a pixel and render() is several times cheaper.
+    const bool moved = std::hypot(x1 - x0, y1 - y0) >= 1e-3;
+    cv::Mat image =
+        moved ? server->renderer_->render_moving(T0, server->geometry_.T_cam_target(x1, y1), seed)
+                    .image
+              : server->renderer_->render(T0, seed).image;
+    // Brightness is linear in exposure time and in gain (GainRaw read as dB).
+    const double scale = exposure_us / options.nominal_exposure_us * std::pow(10.0, gain / 20.0);
+    if (std::abs(scale - 1.0) > 1e-9) image.convertTo(image, CV_8U, scale);
+    copy_region(buffer, image, format);
+    {
+      std::lock_guard<std::mutex> lock(mutex);
+      last = {frame_id, x0, y0, x1, y1, static_cast<double>(exposure_us), seed};
+    }
+    frames.fetch_add(1);
+  }
+
+  // Writes the buffer's region (Width x Height at OffsetX, OffsetY) of the
+  // rendered image in the buffer's pixel format; outside the image is black.
+  static void copy_region(ArvBuffer* buffer, const cv::Mat& image, ArvPixelFormat format) {
+    const int width = arv_buffer_get_image_width(buffer);
+    const int height = arv_buffer_get_image_height(buffer);
+    const int x_offset = arv_buffer_get_image_x(buffer);
+    const int y_offset = arv_buffer_get_image_y(buffer);
+    const int bytes_per_pixel = static_cast<int>(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format)) / 8;
+    // Aravis allocated width * height * bytes_per_pixel (arv_fake_camera_get_payload)
+    // and checked it before calling us.
+    auto* out = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
+    if (out == nullptr || width <= 0 || height <= 0 || bytes_per_pixel <= 0) return;
+    std::memset(out, 0, static_cast<size_t>(width) * height * bytes_per_pixel);
+    const cv::Rect region =
+        cv::Rect(x_offset, y_offset, width, height) & cv::Rect(0, 0, image.cols, image.rows);
+    for (int y = region.y; y < region.y + region.height; ++y) {
+      const uint8_t* row = image.ptr<uint8_t>(y);
+      uint8_t* dst = out + (static_cast<size_t>(y - y_offset) * width + (region.x - x_offset)) *
+                               bytes_per_pixel;
+      for (int x = region.x; x < region.x + region.width; ++x) {
+        const uint8_t v = row[x];
+        if (format == ARV_PIXEL_FORMAT_MONO_16) {
+          const uint16_t v16 = static_cast<uint16_t>(v * 257);  // full 8-bit range onto 16 bits
+          std::memcpy(dst, &v16, 2);                            // GVSP Mono16 is little-endian
+        } else {
+          std::memset(dst, v, static_cast<size_t>(bytes_per_pixel));  // Mono8, Bayer 8, RGB8: grey
+        }
+        dst += bytes_per_pixel;
+      }
+    }
+  }
+};
+
+CameraServer::CameraServer(std::shared_ptr<const scene::SceneRenderer> renderer,
+                           vision::RigGeometry geometry, BenchPositionFn position,
+                           CameraServerOptions options)
+    : renderer_(std::move(renderer)),
+      geometry_(std::move(geometry)),
+      position_(std::move(position)),
+      options_(std::move(options)) {
+  if (!renderer_ || !position_)
+    throw std::invalid_argument("sim::camera::CameraServer: renderer and position are required");
+  if (!(options_.trigger_poll_hz > 0) || !(options_.nominal_exposure_us > 0))
+    throw std::invalid_argument(
+        "sim::camera::CameraServer: trigger_poll_hz and nominal_exposure_us must be > 0");
+  if (options_.serial.empty() || options_.serial.size() >= 16)
+    throw std::invalid_argument("sim::camera::CameraServer: serial '" + options_.serial +
+                                "' must have 1 to 15 characters");
+}
+
+CameraServer::~CameraServer() {
+  stop();
+}
+
+void CameraServer::start() {
+  if (impl_) return;
+  // Aravis binds the control port with address reuse and starts even when it
+  // fails; a plain bind first tells that another camera holds the address.
+  in_addr address{};
+  if (inet_pton(AF_INET, options_.interface_address.c_str(), &address) == 1) {
+    const int probe = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+    sockaddr_in sa{};
+    sa.sin_family = AF_INET;
+    sa.sin_port = htons(3956);  // GVCP, GigE Vision's control port
+    sa.sin_addr = address;
+    const bool taken = probe >= 0 && bind(probe, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0;
+    if (probe >= 0) close(probe);
+    if (taken)
+      throw std::runtime_error("sim camera: GigE Vision control port " +
+                               options_.interface_address +
+                               ":3956 is taken (another camera is serving there)");
+  }
+  auto impl = std::make_unique<Impl>();
+  impl->server = this;
+  impl->gv_camera = arv_gv_fake_camera_new_full(options_.interface_address.c_str(),
+                                                options_.serial.c_str(), nullptr);
+  if (impl->gv_camera == nullptr || !arv_gv_fake_camera_is_running(impl->gv_camera)) {
+    if (impl->gv_camera != nullptr) g_object_unref(impl->gv_camera);
+    throw std::runtime_error(
+        "sim camera: cannot serve GigE Vision on '" + options_.interface_address +
+        "' (no such interface, or another camera already bound its port 3956)");
+  }
+  ArvFakeCamera* camera = arv_gv_fake_camera_get_fake_camera(impl->gv_camera);
+  const vision::Camera& model = renderer_->camera();
+  const auto w = static_cast<guint32>(model.width_px()),
+             h = static_cast<guint32>(model.height_px());
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_WIDTH, w);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_SENSOR_HEIGHT, h);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_WIDTH, w);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_HEIGHT, h);
+  arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_EXPOSURE_TIME_US,
+                                 static_cast<guint32>(std::lround(options_.nominal_exposure_us)));
+  arv_fake_camera_set_trigger_frequency(camera, options_.trigger_poll_hz);
+  arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl.get());
+  impl_ = std::move(impl);
+}
+
+void CameraServer::stop() {
+  if (!impl_) return;
+  g_object_unref(impl_->gv_camera);  // joins Aravis's camera thread: no fill runs after this
+  impl_.reset();
+}
+
+CameraServer::Exposure CameraServer::last_exposure() const {
+  if (!impl_) return {};
+  std::lock_guard<std::mutex> lock(impl_->mutex);
+  return impl_->last;
+}
+
+uint64_t CameraServer::frames_rendered() const {
+  return impl_ ? impl_->frames.load() : 0;
+}
+
+}  // namespace sim::camera

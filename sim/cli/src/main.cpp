@@ -1,0 +1,192 @@
+// rig-sim (run as `rig sim`): the simulated rig on loopback. `rig sim bench`
+// runs the simulated Modbus bench alone; `rig sim --config config/sim.toml`
+// runs the bench and, beside it in SimRig, the GigE camera whose frames are
+// rendered from the bench's actual position (sim/camera/server.hpp).
+#include <CLI/CLI.hpp>
+#include <csignal>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "motion/drive_profile.hpp"
+#include "motion/errors.hpp"
+#include "sim/bench/config.hpp"
+#include "sim/bench/server.hpp"
+#include "sim/camera/config.hpp"
+#include "vision/camera.hpp"
+#include "vision/rig_geometry.hpp"
+#include "vision/target.hpp"
+
+namespace {
+
+// Exit codes, as every rig program: 0 success, 1 a failure while running, 2 bad input.
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitBadInput = 2;
+
+// SIGINT and SIGTERM blocked in the calling thread, and so in every thread it
+// starts afterwards, then collected synchronously by wait(): the servers stop
+// from the main thread, never from a signal handler.
+class StopSignals {
+ public:
+  StopSignals() {
+    sigemptyset(&set_);
+    sigaddset(&set_, SIGINT);
+    sigaddset(&set_, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set_, &old_);
+  }
+  ~StopSignals() { pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+  int wait() {
+    int sig = 0;
+    sigwait(&set_, &sig);
+    return sig;
+  }
+
+ private:
+  sigset_t set_, old_;
+};
+
+struct SimBenchOptions {
+  std::string config = "config/benches/sim.toml";
+  std::string host = "127.0.0.1";
+  int port = 1502;
+  double time_scale = 0;  // 0: the file's [sim] time_scale
+};
+
+// The parts of the simulated rig that run together. A part is started by
+// start_parts and stopped, in reverse order, when SimRig is destroyed.
+struct SimRig {
+  std::unique_ptr<sim::bench::BenchServer> bench;
+  std::unique_ptr<sim::camera::CameraServer> camera;  // renders from bench->actual_position_mm()
+};
+
+std::unique_ptr<sim::bench::BenchServer> start_bench(const SimBenchOptions& o) {
+  motion::DriveProfile profile = motion::load_drive_profile(o.config);
+  sim::bench::BenchSimConfig config = sim::bench::load_bench_sim_config(o.config);
+  if (o.time_scale > 0) config.time_scale = o.time_scale;
+  sim::bench::BenchServerOptions server;
+  server.host = o.host;
+  server.port = o.port;
+  auto bench = std::make_unique<sim::bench::BenchServer>(std::move(profile), config, server);
+  bench->start();
+  std::cout << "rig sim bench: serving " << bench->url() << " (map " << o.config << ", time scale "
+            << config.time_scale << ")" << std::endl;
+  return bench;
+}
+
+// Runs `start`; returns nullopt once the simulated rig is up, else the exit
+// code: 2 for a bad configuration file, key or value, 1 for anything else.
+template <typename Start>
+std::optional<int> start_or_exit_code(Start&& start) {
+  auto fail = [](const std::exception& e, int code) {
+    std::cerr << "rig sim: " << e.what() << "\n";
+    return std::optional<int>(code);
+  };
+  try {
+    start();
+    return std::nullopt;
+  } catch (const motion::ProfileError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::RigConfigError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::TargetError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const vision::CalibrationError& e) {
+    return fail(e, kExitBadInput);
+  } catch (const std::exception& e) {
+    return fail(e, kExitFailure);
+  }
+}
+
+// Serves until SIGINT or SIGTERM, then stops the camera (if any) and the bench.
+int serve_until_signalled(StopSignals& signals, SimRig& rig) {
+  const int sig = signals.wait();
+  std::cout << "rig sim: " << (sig == SIGINT ? "SIGINT" : "SIGTERM") << ", stopping" << std::endl;
+  if (rig.camera) rig.camera->stop();
+  rig.bench->stop();
+  return kExitOk;
+}
+
+int run_until_stopped(const SimBenchOptions& bench_options) {
+  StopSignals signals;  // before any server thread exists
+  SimRig rig;
+  if (auto code = start_or_exit_code([&] { rig.bench = start_bench(bench_options); })) return *code;
+  return serve_until_signalled(signals, rig);
+}
+
+// rig sim --config FILE: the bench and the camera that sees from it.
+int run_rig_until_stopped(const std::string& config_path) {
+  StopSignals signals;  // before any server thread exists
+  SimRig rig;
+  const auto code = start_or_exit_code([&] {
+    const sim::camera::SimRigConfig config = sim::camera::load_sim_rig_config(config_path);
+    SimBenchOptions bench_options;
+    bench_options.config = config.bench_config;
+    bench_options.host = config.bench_host;
+    bench_options.port = config.bench_port;
+    rig.bench = start_bench(bench_options);
+    const sim::bench::BenchServer* bench = rig.bench.get();
+    rig.camera = sim::camera::make_camera_server(config, [bench] {
+      const motion::XY p = bench->actual_position_mm();
+      return std::make_pair(p.x_mm, p.y_mm);
+    });
+    rig.camera->start();
+    std::cout << "rig sim camera: serving " << rig.camera->device_id() << " at "
+              << rig.camera->address() << " (rig capture --camera gige:" << rig.camera->address()
+              << ")" << std::endl;
+  });
+  if (code) return *code;
+  return serve_until_signalled(signals, rig);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"rig sim: the simulated rig (Modbus bench and GigE camera) on loopback"};
+  app.name("rig sim");
+  CLI::App* cmd = &app;
+  int status = kExitOk;
+  cmd->require_subcommand(0, 1);
+  auto rig_config = std::make_shared<std::string>("config/sim.toml");
+  cmd->add_option("--config", *rig_config,
+                  "Simulated rig file: bench, camera, target and geometry (config/sim.toml)")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->footer(
+      "Without a subcommand: the bench and the GigE camera together, until SIGINT or SIGTERM.\n"
+      "Example: rig sim --config config/sim.toml\n"
+      "         rig sim bench --port 1502 --config config/benches/sim.toml");
+  cmd->callback([&status, cmd, rig_config] {
+    if (cmd->get_subcommands().empty()) status = run_rig_until_stopped(*rig_config);
+  });
+
+  auto bench_options = std::make_shared<SimBenchOptions>();
+  CLI::App* bench = cmd->add_subcommand(
+      "bench", "Run the simulated XY bench alone: a Modbus TCP server with motion dynamics");
+  bench
+      ->add_option("--config", bench_options->config,
+                   "Bench file: the drive profile (register map) it serves and its [sim] table")
+      ->capture_default_str()
+      ->check(CLI::ExistingFile);
+  bench->add_option("--port", bench_options->port, "TCP port; 0 picks a free one (printed)")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 65535));
+  bench->add_option("--host", bench_options->host, "Address to listen on")->capture_default_str();
+  bench
+      ->add_option("--time-scale", bench_options->time_scale,
+                   "Simulated seconds per wall second (overrides [sim] time_scale)")
+      ->check(CLI::PositiveNumber);
+  bench->footer(
+      "Stops cleanly on SIGINT or SIGTERM.\n"
+      "Example: rig sim bench --port 1502 --config config/benches/sim.toml\n"
+      "         mbpoll -m tcp -p 1502 -a 1 -0 -r 0 -t 3:int -B -c 2 -1 127.0.0.1");
+  bench->callback([&status, bench_options] { status = run_until_stopped(*bench_options); });
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    const int code = app.exit(e);
+    return code == 0 ? kExitOk : kExitBadInput;
+  }
+  return status;
+}

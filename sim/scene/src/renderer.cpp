@@ -1,0 +1,298 @@
+// sim::scene::SceneRenderer (see sim/scene_renderer.hpp): orchestration, geometry
+// stage and ground truth. The artwork integrals, the ray table, the sensor and
+// the disturbances live in scene_sheet, scene_rays, scene_sensor and
+// scene_disturbances.
+#include "sim/scene/renderer.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "disturbances.hpp"
+#include "geometry.hpp"
+#include "rays.hpp"
+#include "sensor.hpp"
+#include "sheet.hpp"
+
+namespace sim::scene {
+
+namespace {
+
+void check(bool ok, const std::string& name, double value, const std::string& expected) {
+  if (!ok) {
+    throw std::invalid_argument("SceneOptions." + name + " = " + std::to_string(value) +
+                                ": expected " + expected);
+  }
+}
+
+void validate(const SceneOptions& o) {
+  check(o.supersampling >= 1 && o.supersampling <= 16, "supersampling", o.supersampling, "1 .. 16");
+  for (const auto& [name, value] :
+       {std::pair<const char*, double>{"paper_reflectance", o.paper_reflectance},
+        {"ink_reflectance", o.ink_reflectance},
+        {"background_reflectance", o.background_reflectance},
+        {"vignetting", o.vignetting}}) {
+    check(value >= 0 && value <= 1, name, value, "0 .. 1");
+  }
+  check(std::isfinite(o.lighting_gradient_per_m), "lighting_gradient_per_m",
+        o.lighting_gradient_per_m, "a finite number");
+  check(std::isfinite(o.lighting_direction_deg), "lighting_direction_deg", o.lighting_direction_deg,
+        "a finite number");
+  check(o.blur_sigma_px >= 0 && o.blur_sigma_px <= 20, "blur_sigma_px", o.blur_sigma_px, "0 .. 20");
+  check(o.exposure > 0 && o.exposure <= 10, "exposure", o.exposure, "in (0, 10]");
+  check(o.full_well_electrons >= 100, "full_well_electrons", o.full_well_electrons, ">= 100");
+  check(o.read_noise_electrons >= 0, "read_noise_electrons", o.read_noise_electrons, ">= 0");
+  check(o.adc_bits >= 1 && o.adc_bits <= 8, "adc_bits", o.adc_bits, "1 .. 8");
+  check(o.clutter_shapes >= 0, "clutter_shapes", o.clutter_shapes, ">= 0");
+  check(o.occluders >= 0, "occluders", o.occluders, ">= 0");
+  check(o.occluder_min_width_px > 0 && o.occluder_max_width_px >= o.occluder_min_width_px,
+        "occluder_max_width_px", o.occluder_max_width_px, ">= occluder_min_width_px > 0");
+  check(o.motion_blur_samples >= 1, "motion_blur_samples", o.motion_blur_samples, ">= 1");
+}
+
+// Outline of a marker's black square, kPerSide points per side, target frame.
+constexpr int kOutlinePerSide = 32;
+
+}  // namespace
+
+struct SceneRenderer::Impl {
+  vision::Camera camera;
+  vision::Target target;
+  SceneOptions options;
+  detail::RayTable rays;
+  detail::SheetArtwork front;
+  detail::SheetArtwork back;
+  detail::NormalTable normal;
+
+  Impl(const vision::Camera& c, const vision::Target& t, const vision::Codebook& codebook,
+       const SceneOptions& o)
+      : camera(c),
+        target(t),
+        options(o),
+        rays(detail::build_ray_table(c, o.vignetting)),
+        front(t, codebook, true),
+        back(t, codebook, false) {}
+
+  std::vector<MarkerTruth> truth(const vision::Pose& T) const;
+  std::vector<detail::Occluder> place_occluders(const std::vector<MarkerTruth>& markers,
+                                                std::mt19937_64& rng) const;
+  void mark_occlusions(const vision::Pose& T, const std::vector<detail::Occluder>& occluders,
+                       std::vector<MarkerTruth>& markers) const;
+  cv::Mat irradiance(const vision::Pose* poses, int count, uint64_t seed,
+                     std::vector<MarkerTruth>* markers, const vision::Pose& truth_pose) const;
+};
+
+std::vector<MarkerTruth> SceneRenderer::Impl::truth(const vision::Pose& T) const {
+  std::vector<MarkerTruth> result;
+  if (!options.show_target) return result;
+  if ((-(T.R.transpose() * T.t)).z() >= 0) return result;  // printed side faces away
+  const double w = camera.width_px() - 1, h = camera.height_px() - 1;
+  for (const vision::TargetMarker& m : target.markers) {
+    const Eigen::Vector3d centre = T * Eigen::Vector3d(m.centre_m.x(), m.centre_m.y(), 0);
+    if (centre.z() <= 0) continue;
+    MarkerTruth t;
+    t.id = m.id;
+    const auto corners = target.corners_m(m);
+    bool in_front = true;
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d p = T * corners[k];
+      in_front = in_front && p.z() > 0;
+      t.corners_px[k] = p.z() > 0
+                            ? camera.project(p)
+                            : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
+    }
+    double distance = in_front ? std::numeric_limits<double>::infinity() : -1e9;
+    for (int k = 0; k < 4 && in_front; ++k) {
+      for (int s = 0; s < kOutlinePerSide; ++s) {
+        const double f = static_cast<double>(s) / kOutlinePerSide;
+        const Eigen::Vector2d px =
+            camera.project(T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]));
+        distance = std::min({distance, px.x(), px.y(), w - px.x(), h - px.y()});
+      }
+    }
+    t.border_distance_px = distance;
+    t.fully_visible = in_front && distance >= 0;
+    result.push_back(t);
+  }
+  return result;
+}
+
+std::vector<detail::Occluder> SceneRenderer::Impl::place_occluders(
+    const std::vector<MarkerTruth>& markers, std::mt19937_64& rng) const {
+  std::vector<detail::Occluder> result;
+  std::vector<const MarkerTruth*> candidates;
+  for (const MarkerTruth& m : markers) {
+    if (m.border_distance_px > -1e8) candidates.push_back(&m);
+  }
+  std::uniform_real_distribution<double> unit(0, 1);
+  for (int k = 0; k < options.occluders; ++k) {
+    detail::Occluder o;
+    const double angle = unit(rng) * M_PI;
+    o.axis = Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    o.half_width_px =
+        0.5 * (options.occluder_min_width_px +
+               unit(rng) * (options.occluder_max_width_px - options.occluder_min_width_px));
+    o.reflectance = 0.1 + 0.5 * unit(rng);
+    if (candidates.empty()) {
+      o.centre_px = Eigen::Vector2d(unit(rng) * camera.width_px(), unit(rng) * camera.height_px());
+      o.half_length_px = 0.1 * camera.width_px();
+    } else {
+      // Through a point of a marker's outline, so that it cuts the marker.
+      const MarkerTruth& m = *candidates[static_cast<size_t>(rng() % candidates.size())];
+      const int side = static_cast<int>(rng() % 4);
+      const double f = 0.2 + 0.6 * unit(rng);
+      const Eigen::Vector2d a = m.corners_px[side], b = m.corners_px[(side + 1) % 4];
+      const double side_px = (b - a).norm();
+      o.half_length_px = std::max(0.3 * side_px, 2 * o.half_width_px);
+      o.centre_px = a + f * (b - a) + (unit(rng) - 0.5) * o.half_length_px * o.axis;
+    }
+    result.push_back(o);
+  }
+  return result;
+}
+
+void SceneRenderer::Impl::mark_occlusions(const vision::Pose& T,
+                                          const std::vector<detail::Occluder>& occluders,
+                                          std::vector<MarkerTruth>& markers) const {
+  if (occluders.empty()) return;
+  // The PSF spreads an occluder's edge by ~3 sigma: closer than that it biases
+  // the marker's edges, so it counts as occluding.
+  const double margin = 3 * options.blur_sigma_px + 1;
+  const cv::Size size(camera.width_px(), camera.height_px());
+  cv::Mat mask(size, CV_8UC1);
+  for (MarkerTruth& m : markers) {
+    const auto corners = target.corners_m(target.marker(m.id));
+    std::vector<cv::Point> outline;
+    bool ok = true;
+    for (int k = 0; k < 4; ++k) {
+      for (int s = 0; s < kOutlinePerSide; ++s) {
+        const double f = static_cast<double>(s) / kOutlinePerSide;
+        const Eigen::Vector3d p = T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]);
+        ok = ok && p.z() > 0;
+        if (!ok) break;
+        const Eigen::Vector2d px = camera.project(p);
+        outline.emplace_back(static_cast<int>(std::lround(std::clamp(px.x(), -1e5, 1e5) * 16)),
+                             static_cast<int>(std::lround(std::clamp(px.y(), -1e5, 1e5) * 16)));
+      }
+    }
+    if (!ok) continue;
+    mask.setTo(0);
+    cv::fillPoly(mask, std::vector<std::vector<cv::Point>>{outline}, cv::Scalar(255), cv::LINE_8,
+                 4);
+    for (const detail::Occluder& o : occluders) {
+      const cv::Rect box = o.bounds(size, margin);
+      for (int v = box.y; v < box.y + box.height && !m.occluded; ++v) {
+        const uint8_t* row = mask.ptr<uint8_t>(v);
+        for (int u = box.x; u < box.x + box.width; ++u) {
+          if (row[u] != 0 && o.coverage(u, v, margin) > 0) {
+            m.occluded = true;
+            break;
+          }
+        }
+      }
+    }
+    if (m.occluded) m.fully_visible = false;
+  }
+}
+
+cv::Mat SceneRenderer::Impl::irradiance(const vision::Pose* poses, int count, uint64_t seed,
+                                        std::vector<MarkerTruth>* markers,
+                                        const vision::Pose& truth_pose) const {
+  std::mt19937_64 rng(seed ^ 0x5DEECE66Dull);
+  const cv::Size size(camera.width_px(), camera.height_px());
+  cv::Mat background;
+  if (options.clutter_shapes > 0) {
+    background =
+        detail::make_clutter(size, options.clutter_shapes, options.background_reflectance, rng);
+  }
+  cv::Mat radiance(size, CV_32FC1, cv::Scalar(0));
+  for (int k = 0; k < count; ++k) {
+    detail::accumulate_radiance(rays, front, back, options, poses[k], background,
+                                1.0f / static_cast<float>(count), radiance);
+  }
+  std::vector<MarkerTruth> truths = truth(truth_pose);
+  const std::vector<detail::Occluder> occluders = place_occluders(truths, rng);
+  detail::apply_occluders(occluders, radiance);
+  mark_occlusions(truth_pose, occluders, truths);
+  if (markers != nullptr) *markers = std::move(truths);
+
+  if (options.blur_sigma_px > 0) {
+    cv::GaussianBlur(radiance, radiance, cv::Size(), options.blur_sigma_px, options.blur_sigma_px,
+                     cv::BORDER_REFLECT);
+  }
+  // Vignetting and exposure: DN = 255 * exposure * gain * radiance.
+  const float scale = static_cast<float>(255.0 * options.exposure);
+  float* r = radiance.ptr<float>();
+  const float* g = rays.vignetting_gain.data();
+  for (size_t i = 0, n = radiance.total(); i < n; ++i)
+    r[i] *= scale * g[i];
+  return radiance;
+}
+
+SceneRenderer::SceneRenderer(const vision::Camera& camera, const vision::Target& target,
+                             const vision::Codebook& codebook, SceneOptions options) {
+  validate(options);
+  impl_ = std::make_unique<Impl>(camera, target, codebook, options);
+}
+
+SceneRenderer::~SceneRenderer() = default;
+SceneRenderer::SceneRenderer(SceneRenderer&&) noexcept = default;
+SceneRenderer& SceneRenderer::operator=(SceneRenderer&&) noexcept = default;
+
+RenderedFrame SceneRenderer::render(const vision::Pose& T_cam_target, uint64_t seed) const {
+  RenderedFrame frame;
+  const cv::Mat ideal = impl_->irradiance(&T_cam_target, 1, seed, &frame.markers, T_cam_target);
+  const detail::SensorModel sensor{impl_->options.full_well_electrons,
+                                   impl_->options.read_noise_electrons, impl_->options.adc_bits,
+                                   impl_->options.noise};
+  frame.image = detail::apply_sensor(ideal, sensor, impl_->normal, seed);
+  return frame;
+}
+
+RenderedFrame SceneRenderer::render_moving(const vision::Pose& T_cam_target_start,
+                                           const vision::Pose& T_cam_target_end,
+                                           uint64_t seed) const {
+  const int n = impl_->options.motion_blur_samples;
+  const Eigen::Quaterniond q0(T_cam_target_start.R), q1(T_cam_target_end.R);
+  const auto at = [&](double f) {
+    vision::Pose p;
+    p.R = q0.slerp(f, q1).normalized().toRotationMatrix();
+    p.t = (1 - f) * T_cam_target_start.t + f * T_cam_target_end.t;
+    return p;
+  };
+  std::vector<vision::Pose> poses;
+  for (int k = 0; k < n; ++k)
+    poses.push_back(at((k + 0.5) / n));
+  RenderedFrame frame;
+  const cv::Mat ideal = impl_->irradiance(poses.data(), n, seed, &frame.markers, at(0.5));
+  const detail::SensorModel sensor{impl_->options.full_well_electrons,
+                                   impl_->options.read_noise_electrons, impl_->options.adc_bits,
+                                   impl_->options.noise};
+  frame.image = detail::apply_sensor(ideal, sensor, impl_->normal, seed);
+  return frame;
+}
+
+cv::Mat SceneRenderer::render_irradiance(const vision::Pose& T_cam_target, uint64_t seed) const {
+  return impl_->irradiance(&T_cam_target, 1, seed, nullptr, T_cam_target);
+}
+
+std::vector<MarkerTruth> SceneRenderer::ground_truth(const vision::Pose& T_cam_target) const {
+  return impl_->truth(T_cam_target);
+}
+
+const vision::Camera& SceneRenderer::camera() const {
+  return impl_->camera;
+}
+const vision::Target& SceneRenderer::target() const {
+  return impl_->target;
+}
+const SceneOptions& SceneRenderer::options() const {
+  return impl_->options;
+}
+
+}  // namespace sim::scene

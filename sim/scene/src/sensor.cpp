@@ -1,0 +1,88 @@
+// Sensor noise and quantization (see scene_sensor.hpp).
+#include "sensor.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sim::scene::detail {
+
+namespace {
+
+// Acklam's rational approximation of the inverse normal CDF (relative error
+// < 1.2e-9), ample for a 16-bit table.
+double inverse_normal_cdf(double p) {
+  static constexpr double a[] = {-3.969683028665376e+01, 2.209460984245205e+02,
+                                 -2.759285104469687e+02, 1.383577518672690e+02,
+                                 -3.066479806614716e+01, 2.506628277459239e+00};
+  static constexpr double b[] = {-5.447609879822406e+01, 1.615858368580409e+02,
+                                 -1.556989798598866e+02, 6.680131188771972e+01,
+                                 -1.328068155288572e+01};
+  static constexpr double c[] = {-7.784894002430293e-03, -3.223964580411365e-01,
+                                 -2.400758277161838e+00, -2.549732539343734e+00,
+                                 4.374664141464968e+00,  2.938163982698783e+00};
+  static constexpr double d[] = {7.784695709041462e-03, 3.224671290700398e-01,
+                                 2.445134137142996e+00, 3.754408661907416e+00};
+  constexpr double kLow = 0.02425;
+  if (p < kLow) {
+    const double q = std::sqrt(-2 * std::log(p));
+    return (((((c[0] * q + c[1]) * q + c[2]) * q + c[3]) * q + c[4]) * q + c[5]) /
+           ((((d[0] * q + d[1]) * q + d[2]) * q + d[3]) * q + 1);
+  }
+  if (p > 1 - kLow) return -inverse_normal_cdf(1 - p);
+  const double q = p - 0.5;
+  const double r = q * q;
+  return (((((a[0] * r + a[1]) * r + a[2]) * r + a[3]) * r + a[4]) * r + a[5]) * q /
+         (((((b[0] * r + b[1]) * r + b[2]) * r + b[3]) * r + b[4]) * r + 1);
+}
+
+// SplitMix64 (Steele, Lea, Flood 2014): a fast, well-mixed generator whose
+// 64-bit outputs give four 16-bit table indices.
+uint64_t splitmix64(uint64_t* state) {
+  uint64_t z = (*state += 0x9E3779B97F4A7C15ull);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+}  // namespace
+
+NormalTable::NormalTable() : table_(1u << 16) {
+  for (size_t k = 0; k < table_.size(); ++k) {
+    table_[k] = static_cast<float>(inverse_normal_cdf((static_cast<double>(k) + 0.5) / 65536.0));
+  }
+}
+
+cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const NormalTable& normal,
+                     uint64_t seed) {
+  CV_Assert(ideal_dn.type() == CV_32FC1 && ideal_dn.isContinuous());
+  cv::Mat out(ideal_dn.size(), CV_8UC1);
+  const float* in = ideal_dn.ptr<float>();
+  uint8_t* o = out.ptr<uint8_t>();
+  const size_t n = ideal_dn.total();
+  const float e_per_dn = static_cast<float>(model.full_well_electrons / 255.0);
+  const float dn_per_e = 1.0f / e_per_dn;
+  const float read_var =
+      static_cast<float>(model.read_noise_electrons * model.read_noise_electrons);
+  const float step = static_cast<float>(1 << (8 - std::clamp(model.adc_bits, 1, 8)));
+  const float inv_step = 1.0f / step;
+  const float max_level = std::floor(255.0f * inv_step) * step;
+  uint64_t state = seed * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull;
+  uint64_t bits = 0;
+  for (size_t i = 0; i < n; ++i) {
+    float dn = in[i];
+    if (model.noise) {
+      if ((i & 3) == 0) bits = splitmix64(&state);
+      const float e = std::max(dn, 0.0f) * e_per_dn;
+      const float z = normal[static_cast<uint32_t>(bits & 0xFFFFu)];
+      bits >>= 16;
+      dn += std::sqrt(e + read_var) * z * dn_per_e;
+    }
+    // Truncation of a non-negative value + 0.5 rounds to the nearest level.
+    const float level =
+        static_cast<float>(static_cast<int>(std::max(dn, 0.0f) * inv_step + 0.5f)) * step;
+    o[i] = static_cast<uint8_t>(std::min(level, max_level));
+  }
+  return out;
+}
+
+}  // namespace sim::scene::detail

@@ -1,0 +1,39 @@
+// The sensor stage of the renderer: shot and read noise, gain, quantization
+// (private to sim_scene).
+#pragma once
+
+#include <cstdint>
+#include <opencv2/core.hpp>
+#include <vector>
+
+namespace sim::scene::detail {
+
+struct SensorModel {
+  double full_well_electrons = 20000;
+  double read_noise_electrons = 20;
+  int adc_bits = 8;
+  bool noise = true;
+};
+
+// Standard normal deviates from a table of 2^16 quantiles Phi^-1((k + 0.5) / 2^16),
+// indexed by 16 random bits: exact to the table's resolution, truncated at
+// +-4.3 sigma (a variance deficit of 2e-4 relative), and ~10x faster than
+// Box-Muller, which matters at 420k deviates per frame.
+class NormalTable {
+ public:
+  NormalTable();
+  float operator[](uint32_t index16) const { return table_[index16]; }
+
+ private:
+  std::vector<float> table_;
+};
+
+// ideal_dn: CV_32FC1, the noise-free signal in DN (0 .. 255 = 0 .. full well).
+// Returns CV_8UC1: DN = round((e + sqrt(e + read^2) * N(0, 1)) * 255 / full_well)
+// with e = ideal_dn * full_well / 255 electrons (Poisson shot noise in its
+// Gaussian limit, accurate for e >> 10, i.e. above ~0.1 DN at 20000 e-),
+// quantized to adc_bits and clipped to 0 .. 255.
+cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const NormalTable& normal,
+                     uint64_t seed);
+
+}  // namespace sim::scene::detail

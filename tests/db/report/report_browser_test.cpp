@@ -1,0 +1,54 @@
+// report.html in a real browser (issue 7 §6): headless Chromium loads it
+// with no console message, every figure is drawn with data marks, and a
+// screenshot is left in <build>/test-artifacts/report.png for a person.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <regex>
+
+#include "browser.hpp"
+#include "db/report/report.hpp"
+#include "store_fixture.hpp"
+#include "synthetic_run.hpp"
+
+namespace {
+
+int body_attribute(const std::string& dom, const std::string& name) {
+  const std::regex re(name + "=\"([0-9]+)\"");
+  std::smatch m;
+  if (!std::regex_search(dom, m, re)) return -1;
+  return std::stoi(m[1]);
+}
+
+TEST(ReportBrowser, RendersEveryFigureWithoutConsoleErrors) {
+  if (!rig_test::chromium_available()) GTEST_SKIP() << "no /usr/bin/chromium";
+  db_test::ScratchDir dir;
+  rig_test::SyntheticRunSpec spec;
+  spec.positions = 60;
+  spec.solvers = rig_test::paper_like_solvers();
+  rig_test::write_synthetic_run(dir.file("run.db"), spec);
+  spec.seed = 5;
+  rig_test::write_synthetic_run(dir.file("baseline.db"), spec);
+  const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{},
+                                  db::report::RunReference::parse(dir.file("baseline.db")));
+  const db::report::ReportFiles files = report.write(dir.file("out"));
+
+  const std::filesystem::path artifacts = std::filesystem::path(RIG_BINARY_DIR) / "test-artifacts";
+  std::filesystem::create_directories(artifacts);
+  const std::string png = (artifacts / "report.png").string();
+  std::filesystem::remove(png);
+  const rig_test::BrowserResult r = rig_test::render_in_chromium(files.html, png);
+  ASSERT_TRUE(r.ran) << r.stderr_text;
+  EXPECT_EQ(r.exit_code, 0) << r.stderr_text;
+  EXPECT_TRUE(r.console_errors.empty()) << r.console_errors.front();
+  const int expected = body_attribute(r.dom, "data-figures-expected");
+  const int total = body_attribute(r.dom, "data-figures-total");
+  const int rendered = body_attribute(r.dom, "data-figures-rendered");
+  EXPECT_GT(total, 10);
+  EXPECT_EQ(total, expected);
+  EXPECT_EQ(rendered, total);
+  EXPECT_EQ(body_attribute(r.dom, "data-figures-empty"), 0);
+  EXPECT_TRUE(r.screenshot_written);
+}
+
+}  // namespace

@@ -1,0 +1,219 @@
+// A report of unusable input fails with ReportInputError naming the file and
+// what was expected; and the report's queries use the indexes.
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <cmath>
+#include <fstream>
+#include <iostream>
+
+#include "db/report/report.hpp"
+#include "db/store/store.hpp"
+#include "report_data.hpp"
+#include "store_fixture.hpp"
+#include "synthetic_run.hpp"
+
+namespace {
+
+using rig_test::SyntheticRunSpec;
+
+SyntheticRunSpec small_spec() {
+  SyntheticRunSpec spec;
+  spec.positions = 12;
+  spec.solvers = {rig_test::paper_like_solvers()[1]};
+  return spec;
+}
+
+void exec(const std::string& path, const std::string& sql) {
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open(path.c_str(), &db), SQLITE_OK);
+  char* error = nullptr;
+  const int rc = sqlite3_exec(db, sql.c_str(), nullptr, nullptr, &error);
+  const std::string message = error ? error : "";
+  sqlite3_free(error);
+  sqlite3_close(db);
+  ASSERT_EQ(rc, SQLITE_OK) << message;
+}
+
+// The message of the ReportInputError that study_run throws ("" if none).
+std::string input_error(const std::string& path, db::report::ReportOptions options = {}) {
+  try {
+    db::report::study_run(path, options);
+  } catch (const db::report::ReportInputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(ReportInput, AMissingFileIsNamedAndNotCreated) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("nope.db");
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find(path), std::string::npos) << message;
+  EXPECT_NE(message.find("no such file"), std::string::npos) << message;
+  EXPECT_FALSE(std::filesystem::exists(path));
+}
+
+TEST(ReportInput, AnotherProgramsSqliteFileIsRefusedUnchanged) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("other.db");
+  exec(path, "CREATE TABLE notes (text TEXT); INSERT INTO notes VALUES ('hello');");
+  const auto before = std::filesystem::file_size(path);
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("not a rig run database"), std::string::npos) << message;
+  EXPECT_EQ(std::filesystem::file_size(path), before);
+}
+
+TEST(ReportInput, AFileThatIsNotSqliteIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("text.db");
+  std::ofstream(path) << "this is not a database, just text long enough to have a header........"
+                         "..........................................................\n";
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("not a SQLite database"), std::string::npos) << message;
+}
+
+TEST(ReportInput, ANewerSchemaIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("newer.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  exec(path, "PRAGMA user_version = " + std::to_string(db::store::Store::kSchemaVersion + 1));
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("newer"), std::string::npos) << message;
+}
+
+TEST(ReportInput, ADatabaseWithoutACompletedRunIsRefused) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("running.db");
+  SyntheticRunSpec spec = small_spec();
+  spec.status = db::store::RunStatus::kRunning;
+  const std::int64_t id = rig_test::write_synthetic_run(path, spec).run_id;
+  const std::string message = input_error(path);
+  EXPECT_NE(message.find("no completed run"), std::string::npos) << message;
+  // Named explicitly, a running run is refused too.
+  db::report::ReportOptions options;
+  options.run_id = id;
+  EXPECT_NE(input_error(path, options).find("still running"), std::string::npos);
+}
+
+TEST(ReportInput, AnUnknownRunIsNamedWithTheRunsThereAre) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("run.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  db::report::ReportOptions options;
+  options.run_id = 42;
+  const std::string message = input_error(path, options);
+  EXPECT_NE(message.find("no run 42 (runs: 1)"), std::string::npos) << message;
+}
+
+TEST(ReportInput, PicksTheLatestCompletedRunByDefault) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("runs.db");
+  rig_test::write_synthetic_run(path, small_spec());
+  const std::int64_t second = rig_test::write_synthetic_run(path, small_spec()).run_id;
+  SyntheticRunSpec aborted = small_spec();
+  aborted.status = db::store::RunStatus::kAborted;
+  const std::int64_t third = rig_test::write_synthetic_run(path, aborted).run_id;
+  EXPECT_EQ(db::report::study_run(path, {}).run.id, second);
+  db::report::ReportOptions options;
+  options.run_id = third;
+  EXPECT_EQ(db::report::study_run(path, options).run.status, db::store::RunStatus::kAborted);
+}
+
+// EXPLAIN QUERY PLAN of every pass over estimates, detections and frames,
+// on a file with several runs: only SEARCHes through indexes, no SCAN.
+TEST(ReportQueries, UseTheIndexesAndScanNoTable) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("runs.db");
+  for (int i = 0; i < 3; ++i)
+    rig_test::write_synthetic_run(path, small_spec());
+  sqlite3* db = nullptr;
+  ASSERT_EQ(sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  for (const char* query :
+       {db::report::kEstimatesQuery, db::report::kDetectionsQuery, db::report::kFramesQuery}) {
+    sqlite3_stmt* plan = nullptr;
+    ASSERT_EQ(sqlite3_prepare_v2(db, (std::string("EXPLAIN QUERY PLAN ") + query).c_str(), -1,
+                                 &plan, nullptr),
+              SQLITE_OK)
+        << sqlite3_errmsg(db);
+    sqlite3_bind_int64(plan, 1, 2);
+    std::string details;
+    int searches = 0;
+    while (sqlite3_step(plan) == SQLITE_ROW) {
+      const std::string detail = reinterpret_cast<const char*>(sqlite3_column_text(plan, 3));
+      details += detail + "\n";
+      EXPECT_EQ(detail.rfind("SCAN", 0), std::string::npos) << query << "\n" << detail;
+      searches += detail.rfind("SEARCH", 0) == 0 ? 1 : 0;
+    }
+    sqlite3_finalize(plan);
+    EXPECT_GE(searches, 2) << details;
+    EXPECT_NE(details.find("INDEX"), std::string::npos) << details;
+    std::cout << details;
+  }
+  sqlite3_close(db);
+}
+
+// A detection with an infinite corner and a visible marker with an infinite
+// side (detector or simulator bugs) are left out and counted; the corner
+// noise, efficiency and marker-size figures stay finite.
+TEST(ReportInput, NonFiniteDetectionsAndSidesAreCountedNotUsed) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("inf_detection.db");
+  SyntheticRunSpec spec = small_spec();
+  spec.plant_nonfinite_detection = true;
+  spec.marker3_lost_beyond_m = 10.0;  // every visible marker is detected
+  rig_test::write_synthetic_run(path, spec);
+  const db::report::RunStudy st = db::report::study_run(path, {});
+  EXPECT_EQ(st.nonfinite_detections, 1u);
+  EXPECT_EQ(st.nonfinite_visible_markers, 1u);
+  // Plan index 0 (0.12 m) is in the first distance class.
+  EXPECT_TRUE(std::isfinite(st.corner_noise[0].sigma_px));
+  const db::report::SolverStudy* s = st.find("hybrid_oi", "0");
+  ASSERT_NE(s, nullptr);
+  EXPECT_TRUE(std::isfinite(s->classes[0].efficiency));
+  std::size_t expected = 0, detected = 0;
+  for (const db::report::MarkerSizeClass& m : st.marker_sizes) {
+    expected += m.expected;
+    detected += m.detected;
+    EXPECT_TRUE(std::isfinite(m.lower_px) && std::isfinite(m.upper_px));
+    if (m.edge_fit_residual_px.count > 0) {
+      EXPECT_TRUE(std::isfinite(m.edge_fit_residual_px.mean));
+    }
+  }
+  // Every visible marker x frame but the frames of the infinite side; all
+  // of them detected but the infinite detection.
+  const std::size_t frames = static_cast<std::size_t>(spec.frames_per_position);
+  EXPECT_EQ(expected, 4 * st.frames - frames);
+  EXPECT_EQ(detected, expected - 1);
+}
+
+}  // namespace
+
+namespace {
+
+// A converged estimate with an infinite value (a solver bug) is counted as a
+// failure under its own name; the report's other figures stay finite.
+TEST(ReportInput, ANonFiniteConvergedEstimateIsAFailureNotAPoisonedMean) {
+  db_test::ScratchDir dir;
+  const std::string path = dir.file("inf.db");
+  std::int64_t run = 0;
+  {
+    db::store::Store store(path);
+    run = store.start_run(db_test::make_run_description(4));
+    for (int i = 0; i < 4; ++i) {
+      db::store::PositionRecord p = db_test::make_position(i, 2, 4, 2);
+      if (i == 1) p.frames[0].estimates[0].reprojection_error_px = INFINITY;  // solver_0, "0"
+      store.append_position(run, p);
+    }
+    store.finish_run(run, db::store::RunStatus::kCompleted, "");
+  }
+  const db::report::RunStudy st = db::report::study_run(path, {});
+  const db::report::SolverStudy* s = st.find("solver_0", "0");
+  ASSERT_NE(s, nullptr);
+  EXPECT_EQ(s->failed, 1u);
+  EXPECT_EQ(s->failures_by_termination.at("converged with a non-finite value"), 1u);
+  EXPECT_EQ(s->used, 7u);
+  EXPECT_TRUE(std::isfinite(s->reprojection_px.mean));
+}
+
+}  // namespace

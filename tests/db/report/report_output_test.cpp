@@ -1,0 +1,159 @@
+// Report::write: report.html, report.json and the CSV tables say the same
+// thing, and hold every figure and table.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "db/report/report.hpp"
+#include "report_document.hpp"
+#include "store_fixture.hpp"
+#include "svg_detail.hpp"
+#include "synthetic_run.hpp"
+
+namespace {
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream out;
+  out << in.rdbuf();
+  return out.str();
+}
+
+class ReportOutput : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_test::SyntheticRunSpec spec;
+    spec.positions = 80;
+    spec.solvers = rig_test::paper_like_solvers();
+    rig_test::write_synthetic_run(dir_.file("run.db"), spec);
+    spec.seed = 2;
+    rig_test::write_synthetic_run(dir_.file("baseline.db"), spec);
+  }
+  db_test::ScratchDir dir_;
+};
+
+TEST_F(ReportOutput, WritesHtmlJsonAndCsvThatAgree) {
+  const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{});
+  const db::report::ReportFiles files = report.write(dir_.file("out"));
+  const std::string html = slurp(files.html);
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+
+  // Every figure of the JSON is on the page, and the paper's figures are there.
+  ASSERT_TRUE(json["figures"].is_array());
+  std::vector<std::string> ids;
+  for (const auto& f : json["figures"]) {
+    ids.push_back(f["id"]);
+    EXPECT_NE(html.find("id=\"" + ids.back() + "\""), std::string::npos) << ids.back();
+    ASSERT_FALSE(f["series"].empty()) << ids.back();
+    for (const auto& s : f["series"])
+      EXPECT_EQ(s["x"].size(), s["y"].size());
+  }
+  for (const char* id :
+       {"fig8-0", "fig9-0", "fig11-mean-0", "fig11-variance-0", "fig12-0", "fig8-target",
+        "jitter-0", "bias-0", "efficiency-0", "ambiguity-distance", "ambiguity-angle",
+        "flips-distance", "flips-angle", "detection-rate", "corner-quality"}) {
+    EXPECT_NE(std::find(ids.begin(), ids.end(), id), ids.end()) << id;
+  }
+  // Every table is a CSV file whose first line is the table's header.
+  ASSERT_EQ(files.csv.size(), json["tables"].size());
+  for (const auto& t : json["tables"]) {
+    const std::string csv = slurp(dir_.file("out/" + t["id"].get<std::string>() + ".csv"));
+    std::string header;
+    for (const auto& h : t["header"])
+      header += (header.empty() ? "" : ",") + h.get<std::string>();
+    EXPECT_EQ(csv.substr(0, csv.find("\r\n")), header) << t["id"];
+    EXPECT_NE(html.find("id=\"" + t["id"].get<std::string>() + "\""), std::string::npos);
+  }
+  // The numbers are the study's.
+  const db::report::SolverStudy* s = report.study().find("hybrid_oi", "0");
+  ASSERT_TRUE(s && s->ols);
+  bool found = false;
+  for (const auto& j : json["study"]["solvers"]) {
+    if (j["solver"] != "hybrid_oi" || j["scope"] != "0") continue;
+    found = true;
+    EXPECT_EQ(j["ols"]["slope"].get<double>(), s->ols->slope);
+    EXPECT_EQ(j["ols"]["slope_se"].get<double>(), s->ols->slope_se);
+    EXPECT_EQ(j["classes"].size(), 10u);
+  }
+  EXPECT_TRUE(found);
+  // The paper's values are beside ours.
+  EXPECT_NE(html.find("paper: H. OI"), std::string::npos);
+  EXPECT_NE(html.find("1.0084"), std::string::npos);  // paper Table 4, hybrid OI slope
+  EXPECT_FALSE(json["regressed"].get<bool>());
+  // Fig. 12 draws the paper's own fit (Table 4) for the solvers it studied,
+  // on the scale of ours: hybrid OI's (a 1.0084, b 0.0068) is; EKF's
+  // (a 2.6034, b -1.1006, negative below 0.42 m) is not.
+  for (const auto& f : json["figures"]) {
+    if (f["id"] != "fig12-0") continue;
+    std::vector<std::string> labels;
+    for (const auto& series : f["series"])
+      labels.push_back(series["label"]);
+    EXPECT_NE(std::find(labels.begin(), labels.end(), "hybrid_oi (paper's fit, Table 4)"),
+              labels.end());
+    EXPECT_EQ(std::find(labels.begin(), labels.end(), "ekf (paper's fit, Table 4)"), labels.end());
+  }
+}
+
+TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
+  const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{},
+                                  db::report::RunReference::parse(dir_.file("baseline.db")));
+  const db::report::ReportFiles files = report.write(dir_.file("out"));
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  ASSERT_TRUE(json.contains("baseline"));
+  EXPECT_FALSE(json["comparison"].empty());
+  for (const auto& f : json["figures"]) {
+    bool baseline = false;
+    for (const auto& s : f["series"])
+      baseline |= s["label"].get<std::string>().find("baseline") != std::string::npos;
+    EXPECT_TRUE(baseline) << f["id"];
+  }
+  EXPECT_NE(slurp(files.html).find("Against the baseline"), std::string::npos);
+  EXPECT_TRUE(std::filesystem::exists(dir_.file("out/comparison.csv")));
+}
+
+// The verdict column of the comparison table follows from each JSON entry:
+// counted figures beyond regression_k are worse or better by the sign of the
+// difference, others beyond k are "changed".
+TEST_F(ReportOutput, ComparisonVerdictsFollowFromTheJson) {
+  const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{},
+                                  db::report::RunReference::parse(dir_.file("baseline.db")));
+  const db::report::ReportFiles files = report.write(dir_.file("out"));
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json* table = nullptr;
+  for (const auto& t : json["tables"])
+    if (t["id"] == "comparison") table = &t;
+  ASSERT_NE(table, nullptr);
+  const auto& entries = json["comparison"];
+  ASSERT_EQ((*table)["rows"].size(), entries.size());
+  ASSERT_FALSE(entries.empty());
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    const auto& e = entries[i];
+    ASSERT_TRUE(e.contains("counted") && e.contains("regression_k")) << i;
+    if (e["z"].is_null()) continue;  // +-inf: JSON has no infinity
+    const double z = e["z"], k = e["regression_k"], d = e["difference"];
+    const bool counted = e["counted"], beyond = std::fabs(z) > k;
+    const std::string verdict = (*table)["rows"][i].back();
+    const std::string expected =
+        counted && beyond && d > 0   ? "worse"
+        : counted && beyond && d < 0 ? "better"
+        : e["significant"].get<bool>()
+            ? (counted ? "changed (below the family-wise threshold)" : "changed")
+            : "no significant change";
+    EXPECT_EQ(verdict, expected) << e["figure"];
+  }
+}
+
+// A solver's colour in the report is the SVG library's palette colour of the
+// same index, so one solver is not drawn in two colours on one page.
+TEST(ReportColours, AreTheFiguresPalette) {
+  for (int i = 0; i < 2 * db::report::svg::detail::kPaletteSize; ++i) {
+    EXPECT_EQ(db::report::colour_of(static_cast<std::size_t>(i)),
+              db::report::svg::detail::kPalette[i % db::report::svg::detail::kPaletteSize])
+        << i;
+  }
+}
+
+}  // namespace

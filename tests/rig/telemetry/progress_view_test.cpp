@@ -1,0 +1,326 @@
+// ProgressView: ETA arithmetic checked by hand, and the text it renders.
+#include "rig/telemetry/progress_view.hpp"
+
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+namespace {
+
+using nlohmann::json;
+
+json run_start(int plan_size) {
+  return {{"type", "run_start"},
+          {"run_id", 7},
+          {"database", "/tmp/run.db"},
+          {"plan_size", plan_size},
+          {"first_index", 0},
+          {"resumed", false},
+          {"solvers", {"analytic", "lm"}},
+          {"frames_per_position", 3},
+          {"sweep_file", "config/sweeps/ci.toml"}};
+}
+
+json estimate(const std::string& solver, const std::string& scope, double error_m,
+              bool converged = true) {
+  return {{"solver", solver},
+          {"scope", scope},
+          {"distance_m", 0.61 + error_m},
+          {"distance_error_m", error_m},
+          {"reprojection_error_px", 0.25},
+          {"generalization_error_px", nullptr},
+          {"converged", converged}};
+}
+
+json position(int completed, double elapsed_s, int plan_size = 10) {
+  return {{"type", "position"},
+          {"run_id", 7},
+          {"plan_index", completed - 1},
+          {"completed", completed},
+          {"plan_size", plan_size},
+          {"status", "ok"},
+          {"commanded", {{"x_mm", 100.0}, {"y_mm", 50.0}}},
+          {"measured", {{"x_mm", 100.002}, {"y_mm", 49.999}}},
+          {"true_distance_m", 0.61},
+          {"markers_detected", 4},
+          {"estimates",
+           {estimate("analytic", "0", 0.004), estimate("lm", "0", -0.0015),
+            estimate("lm", "target", 0.0008)}},
+          {"elapsed_s", elapsed_s}};
+}
+
+json state(const std::string& s) {
+  return {{"type", "state"}, {"run_id", 7}, {"state", s}};
+}
+
+TEST(FormatDuration, RoundsAndPicksUnits) {
+  EXPECT_EQ(rig::telemetry::format_duration(0), "0s");
+  EXPECT_EQ(rig::telemetry::format_duration(59.4), "59s");
+  EXPECT_EQ(rig::telemetry::format_duration(59.6), "1m00s");
+  EXPECT_EQ(rig::telemetry::format_duration(83), "1m23s");
+  EXPECT_EQ(rig::telemetry::format_duration(7500), "2h05m");  // 2 h 5 min exactly
+  EXPECT_EQ(rig::telemetry::format_duration(-1), "--");
+  EXPECT_EQ(rig::telemetry::format_duration(std::nan("")), "--");
+}
+
+TEST(ProgressView, EtaIsMeanSecondsPerPositionTimesPositionsLeft) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  EXPECT_FALSE(view.eta_s());
+  // 2 s per position, three times: mean 2 s, 7 left -> 14 s.
+  view.update(position(1, 2.0));
+  view.update(position(2, 4.0));
+  view.update(position(3, 6.0));
+  ASSERT_TRUE(view.seconds_per_position());
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.0);
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 14.0);
+}
+
+TEST(ProgressView, EtaWeighsTheNewestIntervalBySmoothing) {
+  rig::telemetry::ProgressView view(0.2);
+  view.update(run_start(10));
+  view.update(position(1, 2.0));  // sample 2 -> mean 2
+  view.update(position(2, 6.0));  // sample 4 -> 2 + 0.2 (4 - 2) = 2.4
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.4);
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 2.4 * 8);  // 19.2 s
+}
+
+TEST(ProgressView, AnIntervalWithAPauseIsLeftOut) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update(position(2, 4.0));
+  view.update(state("paused"));
+  EXPECT_EQ(view.state(), "paused");
+  view.update(state("running"));
+  view.update(position(3, 100.0));  // 96 s, most of it paused: not a sample
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.0);
+  view.update(position(4, 102.0));  // 2 s again
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.0);
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 12.0);
+}
+
+TEST(ProgressView, AFaultThatPausesAlsoLeavesItsIntervalOut) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update({{"type", "fault"}, {"kind", "alarm"}, {"action", "pause"}, {"plan_index", 1}});
+  EXPECT_EQ(view.state(), "paused");
+  view.update(position(2, 50.0));
+  EXPECT_EQ(view.state(), "running");
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.0);
+}
+
+TEST(ProgressView, MissedMessagesShareTheirIntervalAmongThePositionsStored) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update(position(4, 8.0));  // 6 s for 3 positions: 2 s each
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 2.0);
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 12.0);
+}
+
+TEST(ProgressView, JoiningMidRunStartsFromTheFirstPositionSeen) {
+  rig::telemetry::ProgressView view;
+  view.update(position(40, 80.0, 100));  // no run_start: only a reference
+  EXPECT_FALSE(view.seconds_per_position());
+  EXPECT_EQ(view.completed(), 40);
+  EXPECT_EQ(view.plan_size(), 100);
+  view.update(position(41, 83.0, 100));
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 3.0 * 59);
+}
+
+TEST(ProgressView, AResumedRunsFirstPositionCountsAsOne) {
+  rig::telemetry::ProgressView view;
+  json start = run_start(100);
+  start["resumed"] = true;
+  view.update(start);
+  view.update(position(51, 1.5, 100));  // 50 stored before; this session's first took 1.5 s
+  EXPECT_DOUBLE_EQ(*view.seconds_per_position(), 1.5);
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 1.5 * 49);
+}
+
+TEST(ProgressView, EtaIsZeroOnceThePlanIsDone) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(2));
+  view.update(position(1, 1.0, 2));
+  view.update(position(2, 2.0, 2));
+  EXPECT_DOUBLE_EQ(*view.eta_s(), 0.0);
+}
+
+TEST(ProgressView, RunStopSetsStateAndFailedCount) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  json failed = position(1, 2.0);
+  failed["status"] = "failed";
+  view.update(failed);
+  EXPECT_EQ(view.failed(), 1);
+  view.update({{"type", "run_stop"},
+               {"run_id", 7},
+               {"status", "aborted"},
+               {"reason", "operator"},
+               {"positions_ok", 0},
+               {"positions_failed", 3},
+               {"plan_size", 10},
+               {"elapsed_s", 80.2}});
+  EXPECT_TRUE(view.stopped());
+  EXPECT_EQ(view.state(), "aborted");
+  EXPECT_EQ(view.failed(), 3);
+}
+
+TEST(ProgressView, ProgressLineShowsPercentCountEtaAndState) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update(position(2, 4.0));
+  view.update(position(3, 6.0));
+  const std::string line = view.progress_line(80);
+  EXPECT_EQ(line.size(), 80u);
+  // 30% of a bar of 80 - 2 brackets - suffix characters.
+  const std::string suffix = "  30.0%  3/10  ETA 14s  failed 0  running";
+  ASSERT_GE(line.size(), suffix.size());
+  EXPECT_EQ(line.substr(line.size() - suffix.size()), suffix);
+  const int bar = 80 - 2 - static_cast<int>(suffix.size());
+  EXPECT_EQ(line.substr(0, 1 + bar * 3 / 10), "[" + std::string(bar * 3 / 10, '#'));
+  EXPECT_EQ(line[1 + bar * 3 / 10], '-');
+}
+
+TEST(ProgressView, ProgressLineDropsTheBarWhenNarrowAndNeverExceedsTheWidth) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(3, 6.0));
+  for (int width : {20, 30, 45, 52, 60, 120}) {
+    const std::string line = view.progress_line(width);
+    EXPECT_LE(static_cast<int>(line.size()), width) << line;
+  }
+  EXPECT_EQ(view.progress_line(40).find('['), std::string::npos);
+}
+
+TEST(ProgressView, LogLineNamesPositionPlaceTruthAndBestSolver) {
+  rig::telemetry::ProgressView view;
+  EXPECT_EQ(view.log_line(position(13, 12.3, 201)),
+            "position 12 (13/201) ok: x 100.002 y 49.999 mm, true 0.6100 m, 4 markers, "
+            "best lm (target) +0.80 mm, 12.3 s");
+}
+
+TEST(ProgressView, LogLineOfAFailedPositionGivesTheReason) {
+  rig::telemetry::ProgressView view;
+  json p = position(13, 12.3, 201);
+  p["status"] = "failed";
+  p["failure_reason"] = "no marker detected";
+  EXPECT_EQ(view.log_line(p),
+            "position 12 (13/201) FAILED: no marker detected; x 100.002 y 49.999 mm");
+}
+
+TEST(ProgressView, LogLineSkipsEstimatesThatDidNotConverge) {
+  rig::telemetry::ProgressView view;
+  json p = position(1, 1.0);
+  p["estimates"] = {estimate("lm", "target", 0.0001, false), estimate("analytic", "0", 0.002)};
+  EXPECT_NE(view.log_line(p).find("best analytic (marker 0) +2.00 mm"), std::string::npos);
+  p["estimates"] = {estimate("lm", "target", 0.0001, false)};
+  EXPECT_NE(view.log_line(p).find("no converged estimate"), std::string::npos);
+}
+
+TEST(ProgressView, SolverTableKeepsTheLatestErrorPerSolverAndScopeInRunOrder) {
+  rig::telemetry::ProgressView view;
+  view.update(run_start(10));
+  view.update(position(1, 1.0));
+  json later = position(2, 2.0);
+  later["estimates"] = {estimate("lm", "target", -0.0021)};
+  view.update(later);
+  const std::string table = view.solver_table();
+  EXPECT_NE(table.find("latest estimates (position 1)"), std::string::npos) << table;
+  const auto analytic = table.find("analytic     marker 0");
+  const auto lm_marker = table.find("lm           marker 0");
+  const auto lm_target = table.find("lm           target");
+  ASSERT_NE(analytic, std::string::npos) << table;
+  ASSERT_NE(lm_marker, std::string::npos) << table;
+  ASSERT_NE(lm_target, std::string::npos) << table;
+  EXPECT_LT(analytic, lm_marker);
+  EXPECT_LT(lm_marker, lm_target);
+  // lm target row updated by the later position; the others kept from the first.
+  EXPECT_NE(table.find("-2.10 mm", lm_target), std::string::npos) << table;
+  EXPECT_NE(table.find("+4.00 mm", analytic), std::string::npos) << table;
+  EXPECT_NE(table.find("- px"), std::string::npos) << "null generalization error shows as -";
+}
+
+TEST(ProgressView, DescribesEveryMessageType) {
+  rig::telemetry::ProgressView view;
+  EXPECT_EQ(view.describe(run_start(201)),
+            "run 7 started: 201 positions from index 0, solvers analytic, lm, 3 frames per "
+            "position, database /tmp/run.db");
+  EXPECT_EQ(view.describe({{"type", "fault"},
+                           {"plan_index", 12},
+                           {"kind", "alarm"},
+                           {"message", "drive alarm 0x21"},
+                           {"action", "pause"}}),
+            "fault at position 12: alarm: drive alarm 0x21 (action: pause)");
+  EXPECT_EQ(view.describe(state("paused")), "run 7 paused");
+  EXPECT_EQ(view.describe({{"type", "run_stop"},
+                           {"run_id", 7},
+                           {"status", "completed"},
+                           {"reason", ""},
+                           {"positions_ok", 200},
+                           {"positions_failed", 1},
+                           {"plan_size", 201},
+                           {"elapsed_s", 80.2}}),
+            "run 7 completed: 200 ok, 1 failed of 201 positions in 1m20s");
+}
+
+TEST(ProgressView, SurvivesMissingAndMistypedFields) {
+  rig::telemetry::ProgressView view;
+  view.update(json{{"type", "position"}, {"completed", "many"}, {"estimates", 3}});
+  view.update(json::array());
+  view.update(json{{"type", "run_stop"}});
+  EXPECT_EQ(view.log_line(json::object()),
+            "position - (-/-) -: x - y - mm, true - m, - markers, "
+            "no converged estimate, - s");
+  EXPECT_FALSE(view.dashboard(80).empty());
+}
+
+TEST(ProgressView, DashboardShowsRunProgressSolversAndTheLastFault) {
+  rig::telemetry::ProgressView view;
+  EXPECT_EQ(view.dashboard(80).rfind("waiting for telemetry\n", 0), 0u);
+  view.update(run_start(10));
+  view.update(position(1, 2.0));
+  view.update({{"type", "fault"},
+               {"plan_index", 1},
+               {"kind", "link"},
+               {"message", "modbus timeout"},
+               {"action", "retry"}});
+  const std::string screen = view.dashboard(80);
+  EXPECT_EQ(screen.rfind("run 7  config/sweeps/ci.toml  ->  /tmp/run.db\n", 0), 0u) << screen;
+  EXPECT_NE(screen.find(view.progress_line(80) + "\n"), std::string::npos) << screen;
+  EXPECT_NE(screen.find(view.solver_table()), std::string::npos) << screen;
+  EXPECT_NE(screen.find("last fault: fault at position 1: link: modbus timeout (action: retry)"),
+            std::string::npos)
+      << screen;
+}
+
+TEST(ProgressPrinter, WithoutATerminalPrintsOneLinePerMessage) {
+  std::ostringstream out;
+  rig::telemetry::ProgressPrinter printer(out, false, 80);
+  printer.update(run_start(2));
+  printer.update(position(1, 1.0, 2));
+  printer.update({{"type", "run_stop"}, {"run_id", 7}, {"status", "completed"}});
+  const std::string text = out.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 3);
+  EXPECT_EQ(text.find('\r'), std::string::npos);
+  EXPECT_EQ(text.find('\x1b'), std::string::npos);
+}
+
+TEST(ProgressPrinter, OnATerminalRedrawsOneBarAndEndsWithANewline) {
+  std::ostringstream out;
+  rig::telemetry::ProgressPrinter printer(out, true, 60);
+  printer.update(run_start(2));
+  printer.update(position(1, 1.0, 2));
+  printer.update(position(2, 2.0, 2));
+  printer.update({{"type", "run_stop"}, {"run_id", 7}, {"status", "completed"}});
+  const std::string text = out.str();
+  // Lines: run start and run stop; positions only redraw the bar in place.
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 2) << text;
+  EXPECT_NE(text.find("100.0%  2/2"), std::string::npos) << text;
+  EXPECT_EQ(text.back(), '\n');
+}
+
+}  // namespace

@@ -1,0 +1,163 @@
+// The mechanics of the simulated bench, without networking: trapezoidal
+// move times, encoder quantization, backlash, repeatability error, travel
+// limits and homing. Simulated time only, so these tests take no wall time.
+#include "sim/bench/dynamics.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace {
+
+// A bench already homed at (0, 0), no noise, no backlash, 1 µm encoder.
+sim::bench::BenchSimConfig quiet_config() {
+  sim::bench::BenchSimConfig c;
+  c.require_homing = false;
+  for (sim::bench::AxisConfig* a : {&c.x, &c.y}) {
+    a->max_speed_mm_s = 100;
+    a->accel_mm_s2 = 500;
+    a->travel_min_mm = -5;
+    a->travel_max_mm = 505;
+    a->initial_mm = 0;
+  }
+  return c;
+}
+
+// Advances in 0.1 ms steps until the bench stops; returns the simulated time, s.
+double run_until_still(sim::bench::BenchDynamics& d) {
+  double t = 0;
+  while (d.moving() && t < 100) {
+    d.advance(1e-4);
+    t += 1e-4;
+  }
+  return t;
+}
+
+TEST(BenchDynamics, OneMillimetreStepFollowsTheTriangularProfile) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(1, 0, 50);
+  // v^2/a = 5 mm > 1 mm: the profile never reaches 50 mm/s; it is a triangle
+  // of duration 2 sqrt(d/a) = 2 sqrt(1/500) = 89.44 ms. The integrator runs
+  // in 0.25 ms sub-steps and the loop in 0.1 ms steps: within 1 ms.
+  EXPECT_NEAR(run_until_still(d), 2 * std::sqrt(1.0 / 500), 1e-3);
+  EXPECT_DOUBLE_EQ(d.encoder_x_mm(), 1.0);
+  EXPECT_TRUE(d.in_position());
+}
+
+TEST(BenchDynamics, LongMoveCruisesAtTheCommandedSpeed) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(100, 0, 50);
+  // Trapezoid: d/v + v/a = 100/50 + 50/500 = 2.1 s.
+  EXPECT_NEAR(run_until_still(d), 2.1, 2e-3);
+}
+
+TEST(BenchDynamics, SpeedIsCappedAtTheAxisMaximum) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(0, 100, 1000);
+  // Capped at 100 mm/s: 100/100 + 100/500 = 1.2 s.
+  EXPECT_NEAR(run_until_still(d), 1.2, 2e-3);
+}
+
+TEST(BenchDynamics, AxesRunTheirOwnProfiles) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(1, 100, 50);
+  d.advance(0.1);
+  // X (89 ms triangle) has arrived while Y is still cruising.
+  EXPECT_DOUBLE_EQ(d.encoder_x_mm(), 1.0);
+  EXPECT_LT(d.encoder_y_mm(), 100);
+  EXPECT_TRUE(d.moving());
+}
+
+TEST(BenchDynamics, EncoderQuantizesToItsResolution) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.encoder_resolution_mm = 0.01;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  d.move(1.234, 0, 50);
+  run_until_still(d);
+  EXPECT_NEAR(d.encoder_x_mm(), 1.23, 1e-12);
+  EXPECT_NEAR(d.actual_x_mm(), 1.234, 1e-12);
+}
+
+TEST(BenchDynamics, BacklashLeavesTheCarriageBehindAfterAReversal) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.x.backlash_mm = 0.05;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  d.move(10, 0, 50);
+  run_until_still(d);
+  // Pushed in +x, the carriage trails the motor by half the deadband.
+  EXPECT_NEAR(d.actual_x_mm() - d.encoder_x_mm(), -0.025, 1e-9);
+  d.move(5, 0, 50);
+  run_until_still(d);
+  EXPECT_NEAR(d.actual_x_mm() - d.encoder_x_mm(), +0.025, 1e-9);
+}
+
+TEST(BenchDynamics, RepeatabilityErrorHasTheConfiguredSpread) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.x.repeatability_mm = 0.01;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  const int n = 2000;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    d.move(i % 2 ? 1 : 2, 0, 100);
+    run_until_still(d);
+    const double e = d.actual_x_mm() - d.encoder_x_mm();
+    sum += e;
+    sum2 += e * e;
+  }
+  const double mean = sum / n;
+  const double sd = std::sqrt(sum2 / n - mean * mean);
+  // Standard error of a normal sample's sd is sd / sqrt(2n) = 1.6 %; of the
+  // mean sd / sqrt(n) = 0.22 µm. Both checked at about 5 standard errors.
+  EXPECT_NEAR(sd, 0.01, 0.0008);
+  EXPECT_NEAR(mean, 0, 0.0011);
+}
+
+TEST(BenchDynamics, TargetOutsideTheTravelRaisesTheLimitAlarmAndDoesNotMove) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(506, 0, 50);
+  EXPECT_EQ(d.alarm_code(), sim::bench::kAlarmLimit);
+  EXPECT_FALSE(d.moving());
+}
+
+TEST(BenchDynamics, MovesAreIgnoredDuringAnAlarmUntilReset) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.raise_alarm(sim::bench::kAlarmFollowingError);
+  d.move(1, 0, 50);
+  EXPECT_FALSE(d.moving());
+  d.reset_alarm();
+  d.move(1, 0, 50);
+  EXPECT_TRUE(d.moving());
+}
+
+TEST(BenchDynamics, HomingEndsAtHomeAndSetsHomed) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.require_homing = true;
+  c.x.initial_mm = 30;
+  sim::bench::BenchDynamics d(c, 2, 3);
+  EXPECT_FALSE(d.homed());
+  d.move(1, 1, 50);
+  EXPECT_EQ(d.alarm_code(), sim::bench::kAlarmNotHomed);
+  d.reset_alarm();
+  d.home();
+  run_until_still(d);
+  d.advance(1e-4);
+  EXPECT_TRUE(d.homed());
+  EXPECT_TRUE(d.take_homing_completed());
+  EXPECT_DOUBLE_EQ(d.encoder_x_mm(), 2);
+  EXPECT_DOUBLE_EQ(d.encoder_y_mm(), 3);
+  EXPECT_TRUE(d.in_position());
+}
+
+TEST(BenchDynamics, StopDeceleratesAtTheConfiguredRate) {
+  sim::bench::BenchDynamics d(quiet_config(), 0, 0);
+  d.move(400, 0, 100);
+  d.advance(1.0);  // cruising at 100 mm/s since 0.2 s
+  const double at_stop = d.encoder_x_mm();
+  d.stop();
+  run_until_still(d);
+  // Stopping distance v^2 / (2a) = 100^2 / 1000 = 10 mm.
+  EXPECT_NEAR(d.encoder_x_mm() - at_stop, 10, 0.05);
+  EXPECT_FALSE(d.in_position());
+}
+
+}  // namespace

@@ -1,0 +1,148 @@
+// The simulated rig in the test process, for end-to-end sweeps run by the
+// real `rig sweep` program: a real Modbus TCP bench server (sim::bench::BenchServer
+// on an ephemeral port) and the real GigE Vision camera on loopback
+// (sim::camera::CameraServer, rendering what the camera sees at the bench's actual
+// position). The test holds both, so it can inject faults while `rig sweep`
+// runs as a child process it can signal or kill.
+#pragma once
+
+#include <sqlite3.h>
+
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+
+#include "child_process.hpp"
+#include "motion/drive_profile.hpp"
+#include "rig_command.hpp"
+#include "sim/bench/config.hpp"
+#include "sim/bench/server.hpp"
+#include "sim/camera/server.hpp"
+#include "vision/codebook.hpp"
+#include "vision/rig_geometry.hpp"
+
+namespace rig_test {
+
+inline std::string repo_path(const std::string& relative) {
+  return std::string(RIG_SOURCE_DIR) + "/" + relative;
+}
+
+inline std::string rig_binary() {
+  return std::string(RIG_BINARY_DIR) + "/bin/rig";
+}
+
+struct SweepFileOptions {
+  std::string plan = "kind = \"grid\"\nx_mm = [300.0, 800.0, 100.0]\ny_mm = [150.0, 150.0, 10.0]\n";
+  int frames = 2;
+  std::string on_alarm = "abort";
+  int max_consecutive_failed = 5;
+  std::string calibration;  // "" = the paper camera
+  std::string extra_capture;
+  int telemetry_port = 5656;  // publish; control is +1
+};
+
+class SimRig {
+ public:
+  // time_scale: simulated seconds per wall second of the bench's motion
+  // (the camera still exposes in real time).
+  explicit SimRig(double time_scale = 4.0)
+      : dir_(std::filesystem::temp_directory_path() /
+             ("rig_sweep_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++))),
+        geometry_(vision::RigGeometry::load(repo_path("config/rigs/sim.toml"))) {
+    std::filesystem::remove_all(dir_);
+    std::filesystem::create_directories(dir_);
+    sim::bench::BenchSimConfig sim_config =
+        sim::bench::load_bench_sim_config(repo_path("config/benches/sim.toml"));
+    sim_config.time_scale = time_scale;
+    bench_ = std::make_unique<sim::bench::BenchServer>(
+        motion::load_drive_profile(repo_path("config/benches/sim.toml")), sim_config);
+    bench_->start();
+    auto renderer = std::make_shared<const sim::scene::SceneRenderer>(
+        vision::Camera::paper_default(),
+        vision::Target::load(repo_path("config/targets/paper.toml")), vision::Codebook());
+    sim::bench::BenchServer* bench = bench_.get();
+    camera_ = std::make_unique<sim::camera::CameraServer>(renderer, geometry_, [bench] {
+      const motion::XY p = bench->actual_position_mm();
+      return std::make_pair(p.x_mm, p.y_mm);
+    });
+    camera_->start();
+  }
+  ~SimRig() {
+    camera_.reset();
+    bench_.reset();
+    std::filesystem::remove_all(dir_);
+  }
+
+  sim::bench::BenchServer& bench() { return *bench_; }
+  sim::camera::CameraServer& camera() { return *camera_; }
+  const vision::RigGeometry& geometry() const { return geometry_; }
+  std::string file(const std::string& name) const { return (dir_ / name).string(); }
+  std::string database() const { return file("run.db"); }
+
+  // Writes a sweep file for this rig; returns its path.
+  std::string write_sweep(const SweepFileOptions& o, const std::string& name = "sweep.toml") const {
+    std::ofstream out(file(name));
+    out << "[plan]\n"
+        << o.plan << "\n[capture]\ncamera = \"gige:127.0.0.1\"\ncalibration = \"" << o.calibration
+        << "\"\nframes_per_position = " << o.frames << "\n"
+        << o.extra_capture << "\n[bench]\nurl = \"modbus-tcp://127.0.0.1:" << bench_->port()
+        << "\"\nprofile = \"" << repo_path("config/benches/sim.toml")
+        << "\"\nspeed_mm_s = 100\n\n[faults]\non_alarm = \"" << o.on_alarm
+        << "\"\nmax_consecutive_failed = " << o.max_consecutive_failed
+        << "\n\n[target]\nlayout = \"" << repo_path("config/targets/paper.toml")
+        << "\"\n\n[rig]\nfile = \"" << repo_path("config/rigs/sim.toml")
+        << "\"\n\n[database]\npath = \"" << database()
+        << "\"\ndurable_commits = true\n\n[telemetry]\npublish = \"tcp://127.0.0.1:"
+        << o.telemetry_port << "\"\ncontrol = \"tcp://127.0.0.1:" << o.telemetry_port + 1 << "\"\n";
+    return file(name);
+  }
+
+ private:
+  static int& counter() {
+    static int n = 0;
+    return n;
+  }
+  std::filesystem::path dir_;
+  vision::RigGeometry geometry_;
+  std::unique_ptr<sim::bench::BenchServer> bench_;
+  std::unique_ptr<sim::camera::CameraServer> camera_;
+};
+
+// Read-only SQL on a run database, independent of db::store::Store: what the file
+// holds, as another program would see it.
+class SqlProbe {
+ public:
+  explicit SqlProbe(const std::string& path) {
+    if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK)
+      throw std::runtime_error("cannot open " + path);
+  }
+  ~SqlProbe() { sqlite3_close(db_); }
+  SqlProbe(const SqlProbe&) = delete;
+  SqlProbe& operator=(const SqlProbe&) = delete;
+
+  // The first column of every row, as text.
+  std::vector<std::string> column(const std::string& sql) const {
+    sqlite3_stmt* s = nullptr;
+    if (sqlite3_prepare_v2(db_, sql.c_str(), -1, &s, nullptr) != SQLITE_OK)
+      throw std::runtime_error(sql + ": " + sqlite3_errmsg(db_));
+    std::vector<std::string> out;
+    while (sqlite3_step(s) == SQLITE_ROW) {
+      const auto* t = sqlite3_column_text(s, 0);
+      out.push_back(t ? reinterpret_cast<const char*>(t) : "NULL");
+    }
+    sqlite3_finalize(s);
+    return out;
+  }
+  std::string value(const std::string& sql) const {
+    const auto c = column(sql);
+    return c.empty() ? "" : c.front();
+  }
+  long long count(const std::string& sql) const { return std::stoll(value(sql)); }
+
+ private:
+  sqlite3* db_ = nullptr;
+};
+
+}  // namespace rig_test
