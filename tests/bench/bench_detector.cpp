@@ -1,4 +1,4 @@
-// Detector benchmark (issue 3, §7): our detector against OpenCV's ArUco
+// Detector benchmark: our detector against OpenCV's ArUco
 // detector (CORNER_REFINE_SUBPIX) and AprilTag 3 (quad_decimate 2, one
 // thread), on the same frames of sim::scene::SceneRenderer: the paper's camera and
 // sheet, the pose marker at 0.10-1.00 m anywhere in the image, tilt up to

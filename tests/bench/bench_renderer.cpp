@@ -1,4 +1,4 @@
-// The scene renderer's time per 736x571 frame (issue 3, §3 and §7: at most
+// The scene renderer's time per 736x571 frame (target: at most
 // 15 ms on one core) with the paper's camera and sheet, realistic defaults.
 //   scripts/bench bench_renderer
 #include <benchmark/benchmark.h>

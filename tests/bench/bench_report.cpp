@@ -1,4 +1,4 @@
-// rig report over a database of 1,000,000 estimates (issue 7 §7: at most 10 s
+// rig report over a database of 1,000,000 estimates (target: at most 10 s
 // on a 2-core machine like CI's). The database is written once by the
 // synthetic-run fixture (10,000 positions x 5 frames x 10 solvers x 2 scopes,
 // 4 detections per frame, non-durable commits) and reused: set

@@ -1,10 +1,10 @@
-// Run database benchmarks (issue 6 §8):
+// Run database benchmarks:
 //  - positions appended per second, each position a sweep's worth of rows:
 //    2 frames x (4 detections + 10 solvers x 2 scopes estimates) plus stage
 //    times, one transaction per position, on a file in /tmp; with durable
 //    commits (synchronous FULL: one WAL fsync per position) and without
 //    (synchronous NORMAL). Median and p99 per position, rates of positions and
-//    of estimate rows (target of §8: >= 100,000 estimate rows per second).
+//    of estimate rows (target: >= 100,000 estimate rows per second).
 //  - reading one solver's estimates of a 1,000-position run (a report's query).
 // Run: scripts/bench bench_store
 #include <benchmark/benchmark.h>

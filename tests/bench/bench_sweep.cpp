@@ -1,4 +1,4 @@
-// Sweep benchmarks (issue 6 §8): what one bench position costs the
+// Sweep benchmarks: what one bench position costs the
 // controller once the bench has settled and the frames are in hand, i.e.
 // everything of rig::sweep::Controller's measure_position and append_position except
 // motion, settling and exposure (rig/src/controller.cpp):
@@ -16,7 +16,7 @@
 // all four markers are in view: checked), rendered once before timing. The
 // frames of a position are cycled, so a run of many positions repeats them.
 //
-// Benchmarks (positions per second = items_per_second; target of §8: >= 100
+// Benchmarks (positions per second = items_per_second; target: >= 100
 // with 4 markers and every solver):
 //   BM_PositionCompute/frames:F           measure + to_frame_record for F frames,
 //                                          ground truth once

@@ -144,7 +144,7 @@ struct TempProfile {
 ProcessRun run_chromium(const std::vector<std::string>& mode_flags, const std::string& url) {
   TempProfile profile;
   std::vector<std::string> argv = {kChromium,
-                                   // The flags, exactly.
+                                   // No network, no sandbox (root), a fresh profile.
                                    "--headless", "--no-sandbox", "--disable-gpu",
                                    "--disable-background-networking", "--disable-component-update",
                                    "--no-first-run", "--user-data-dir=" + profile.path,

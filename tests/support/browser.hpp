@@ -25,7 +25,7 @@ struct BrowserResult {
 };
 
 // Runs /usr/bin/chromium twice on file://<absolute html_path>, each time with
-// exactly the flags (--headless --no-sandbox --disable-gpu
+// exactly these flags (--headless --no-sandbox --disable-gpu
 // --disable-background-networking --disable-component-update --no-first-run),
 // a new empty --user-data-dir (removed after), --virtual-time-budget=5000 so
 // load handlers run, and --enable-logging=stderr --v=0 for the console:

@@ -1,4 +1,4 @@
-// The frame set of the detector tests and benchmarks (issue 3, §6-7): the
+// The frame set of the detector tests and benchmarks: the
 // paper's camera looking at the paper's sheet of 5 cm markers, the pose marker
 // at 0.10-1.00 m anywhere in the image, the sheet tilted up to 40 degrees from
 // the line of sight, any in-plane rotation. Deterministic from a seed.
@@ -73,7 +73,7 @@ inline std::vector<vision::Pose> sample_poses(const vision::Camera& camera, int 
   return poses;
 }
 
-// Distance classes of the issue: 0.1-0.4, 0.4-0.7, 0.7-1.0 m (and beyond).
+// The detector's three distance classes: 0.1-0.4, 0.4-0.7, 0.7-1.0 m (and beyond).
 inline int distance_class(double distance_m) {
   return distance_m < 0.4 ? 0 : distance_m < 0.7 ? 1 : 2;
 }

@@ -1,4 +1,4 @@
-// The detector on frames of sim::scene::SceneRenderer (issue 3, §6): the paper's
+// The detector on frames of sim::scene::SceneRenderer: the paper's
 // camera (736x571, its intrinsics and distortion) and sheet (5 cm markers),
 // the pose marker at 0.10-1.00 m anywhere in the image, tilt up to 40 degrees,
 // the renderer's realistic optics and sensor (blur 0.6 px, vignetting,
@@ -89,7 +89,7 @@ void tally_frame(const sim::scene::RenderedFrame& frame, const vision::Pose& T,
     }
 }
 
-// Issue 3's bars: detection rate >= 99.5 %, corner RMS <= 0.07 px in every
+// The detector's bars (vision/detector.hpp): detection rate >= 99.5 %, corner RMS <= 0.07 px in every
 // distance class, and no false detection.
 void expect_issue_targets(const Tally& t) {
   EXPECT_GE(static_cast<double>(t.found) / t.detectable, 0.995)
@@ -124,7 +124,7 @@ class DetectorRendered : public ::testing::Test {
   vision::Detector detector_;
 };
 
-// Issue 3 §6: detection rate >= 99.5 %. 500 frames hold ~1,400 detectable
+// Detection rate >= 99.5 %. 500 frames hold ~1,400 detectable
 // markers, so the bound allows 7 misses.
 TEST_F(DetectorRendered, DetectsAtLeast99Point5PercentOfVisibleMarkers) {
   const Tally t = run(sim::scene::SceneOptions{}, 500, 11);
@@ -136,7 +136,7 @@ TEST_F(DetectorRendered, DetectsAtLeast99Point5PercentOfVisibleMarkers) {
   EXPECT_EQ(t.false_detections, 0);
 }
 
-// Issue 3 §7 sets the corner target at 0.07 px RMS in every distance class;
+// The corner target is 0.07 px RMS in every distance class;
 // the test holds the detector to it per class (each class gets 150-300
 // detections, so the RMS itself is known to ~5 %), and no single marker may
 // be off by more than 0.5 px (a corner placed from the wrong edge would be
@@ -201,7 +201,7 @@ TEST_F(DetectorRendered, HeavierBlurKeepsDetectionAndCornerAccuracy) {
   expect_issue_targets(t);
 }
 
-// Issue 3 §2: the detector keeps its accuracy when the sheet is cut one
+// The detector keeps its accuracy when the sheet is cut one
 // quiet-zone cell outside the marker (a marker printed alone with `rig
 // marker`, on a darker background): the paper edge lies one cell (6-60 px)
 // outside the marker's edge, beyond the edge fit's window.
@@ -255,7 +255,7 @@ TEST_F(DetectorRendered, HalfResolutionCandidatesGiveTheSameCornersAsFullResolut
   EXPECT_LE(only_one, both / 100) << "of " << both;
 }
 
-// Issue 3 §6: zero false detections over >= 1,000 clutter-only frames
+// Zero false detections over >= 1,000 clutter-only frames
 // (rectangles, quadrilaterals, ellipses, lines, checker patches) at the
 // default setting.
 TEST_F(DetectorRendered, ClutterOnlyFramesGiveNoDetections) {

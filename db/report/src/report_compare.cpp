@@ -1,4 +1,4 @@
-// Run comparison (issue 7 §4): each solver's figures against the baseline's,
+// Run comparison: each solver's figures against the baseline's,
 // flagged only where the difference exceeds k standard errors.
 #include <algorithm>
 #include <cmath>

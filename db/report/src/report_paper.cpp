@@ -1,6 +1,5 @@
-// The paper's own figures (Maidi, Didier, Ababsa, Mallem 2010, Tables 2-6;
-// DESIGN.md "Paper facts"), shown beside ours. Copied from the paper's text
-// in ../shared/paper; the paper computed them on 1,400 poses (Tables 2-3) and
+// The paper's own figures (Maidi, Didier, Ababsa, Mallem 2010, Tables 2-6 and
+// §3, DOI 10.1007/s00138-008-0170-y), shown beside ours, as printed there; the paper computed them on 1,400 poses (Tables 2-3) and
 // 1,939 bench positions (Tables 4-6) with its own marker and camera.
 #include "db/report/report.hpp"
 
@@ -9,7 +8,7 @@ namespace db::report {
 std::optional<PaperValues> paper_values(const std::string& solver) {
   // label, Table 2 (mean, variance, sd), Table 3 (mean, variance, sd),
   // Table 4 (a, se, b, se), Table 5 (RMS, variance), Table 6 (mean error,
-  // variance, sd, time), time per pose (DESIGN.md "Paper facts").
+  // variance, sd, time), time per pose (§3, on a Pentium III 1.1 GHz).
   if (solver == "analytic") {
     return PaperValues{"Anal. algo.", 0.5421, 0.0694,    0.2634, 10.9562, 48.0473,
                        6.9316,        1.0081, 0.0009,    0.0068, 0.0007,  0.0069,

@@ -19,7 +19,7 @@ namespace {
 // Child rows reference their parent with ON DELETE CASCADE so that deleting a
 // run deletes everything measured in it.
 constexpr const char* kMigrations[] = {
-    // 1: the schema of DESIGN.md "Database".
+    // 1: runs, positions, frames, detections, estimates (docs/database.md).
     R"sql(
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
@@ -109,8 +109,9 @@ CREATE TABLE estimates (
 );
 CREATE INDEX estimates_by_frame_solver ON estimates (frame_id, solver);
 )sql",
-    // 2: what a report needs beyond the measurements (issue 7 §3) and the
-    // faults of a sweep (issue 6 §4), all written by the controller.
+    // 2: what a report needs beyond the measurements (truth per position,
+    // bounds, markers in view) and the faults of a sweep, all written by the
+    // controller.
     R"sql(
 ALTER TABLE positions ADD COLUMN true_viewing_angle_deg REAL;
 CREATE TABLE distance_bounds (

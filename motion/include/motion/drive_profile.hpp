@@ -1,7 +1,6 @@
 // motion::DriveProfile: everything ModbusBench knows about a drive, read from a
 // TOML file (config/benches/*.toml), never from code. The default map of the
-// simulated bench is in /work/shared/DESIGN.md ("Simulated bench: default Modbus
-// register map") and ships as config/benches/sim.toml; a documented template
+// simulated bench is docs/register-map.md and ships as config/benches/sim.toml; a documented template
 // for a real drive is config/benches/template_real_drive.toml.
 //
 // Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
@@ -19,7 +18,7 @@
 namespace motion {
 
 // Order of the two 16-bit words of a 32-bit value. kHighFirst: the register at
-// the lower address holds bits 31..16 (DESIGN.md default, Oriental Motor AZ);
+// the lower address holds bits 31..16 (rig's default map, Oriental Motor AZ);
 // kLowFirst: it holds bits 15..0 (many IAI and PLC maps).
 enum class WordOrder { kHighFirst, kLowFirst };
 

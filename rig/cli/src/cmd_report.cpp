@@ -1,5 +1,5 @@
 // rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression] --out DIR:
-// the regression report of one run of a run database (issue 7): report.html
+// the regression report of one run of a run database: report.html
 // (self-contained, printable), report.json (every figure's numbers) and one
 // CSV file per table, in DIR.
 //

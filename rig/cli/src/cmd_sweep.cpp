@@ -1,4 +1,4 @@
-// rig sweep SWEEP.toml: the product's main job (issue 6). Drives the bench
+// rig sweep SWEEP.toml: the product's main job. Drives the bench
 // through the sweep file's plan, measures every position with every solver
 // and logs it to the run database; --resume continues a run that stopped;
 // --replay measures the frames a run saved again, into a new run (rig/replay.hpp).

@@ -1,4 +1,4 @@
-// report.html in a real browser (issue 7 §6): headless Chromium loads it
+// report.html in a real browser: headless Chromium loads it
 // with no console message, every figure is drawn with data marks, and a
 // screenshot is left in <build>/test-artifacts/report.png for a person.
 #include <gtest/gtest.h>

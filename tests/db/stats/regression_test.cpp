@@ -60,7 +60,7 @@ double certified(const NistDataset& d, const std::string& key) {
   return it->second;
 }
 
-// The issue asks for 1e-9 relative; the certified values carry 15 significant
+// The fits must match to 1e-9 relative; the certified values carry 15 significant
 // digits and a centred two-pass fit loses only a few bits on these
 // (low/average difficulty) datasets, so 1e-9 leaves a wide margin.
 constexpr double kRelative = 1e-9;

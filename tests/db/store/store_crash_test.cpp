@@ -1,4 +1,4 @@
-// Crash consistency (issue 6 §4): a child process appends positions in a loop
+// Crash consistency: a child process appends positions in a loop
 // and is killed with SIGKILL at random moments, several times. After every
 // kill the file must pass PRAGMA integrity_check, every stored position must
 // be complete and equal to what was written, the stored plan indices must be

@@ -1,4 +1,4 @@
-// `rig sweep --replay` end to end (issue 6 §3): the real `rig sweep` saves
+// `rig sweep --replay` end to end: the real `rig sweep` saves
 // frames from the simulated rig (real Modbus TCP, real GigE Vision on
 // loopback), then the real `rig sweep --replay` measures them again into new
 // runs of the same database, with no bench or camera.

@@ -1,4 +1,4 @@
-// Replay of a recorded sweep (issue 6 §3): the replay bench, the replay frame
+// Replay of a recorded sweep: the replay bench, the replay frame
 // source and the replay's configuration checks, on a run database and PNG
 // frames written here (replay_sweep_test.cpp runs the real program).
 #include "rig/sweep/replay.hpp"

@@ -1,4 +1,4 @@
-// End to end (issue 6 §7): the real `rig sweep` program against the simulated
+// End to end: the real `rig sweep` program against the simulated
 // rig (real Modbus TCP, real GigE Vision on loopback), writing a real SQLite
 // file; then what the file holds. Faults are injected into the simulated
 // bench and camera while the sweep runs; crashes are real SIGKILLs.

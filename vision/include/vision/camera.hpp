@@ -1,6 +1,4 @@
-// build-<you>, commit only your own paths with `git commit -- paths`, never git
-// stash/reset/checkout, deadline 07:30 UTC). <<< vision::Camera: the pinhole camera with
-// Brown-Conrady lens distortion.
+// vision::Camera: the pinhole camera with Brown-Conrady lens distortion.
 //
 // Frames and units. A point p_cam (metres) in the camera frame (x right, y down,
 // z forward along the optical axis) projects to the normalized image point

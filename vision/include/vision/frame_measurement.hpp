@@ -1,4 +1,4 @@
-// vision::FrameMeasurer: what one frame yields (issue 6 §2, paper §3): the
+// vision::FrameMeasurer: what one frame yields (Maidi et al. 2010, §3): the
 // fiducials in it, and every pose solver's estimate of T_cam_target from the
 // pose marker alone and from the whole target, with the reconstruction
 // (reprojection) error and, for the pose marker, the generalization error.

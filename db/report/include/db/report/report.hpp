@@ -1,4 +1,4 @@
-// db::report::Report: the document a run database exists for (issue 7): how far each
+// db::report::Report: the document a run database exists for: how far each
 // solver is from the truth, at which distance, and whether this run is better
 // or worse than a baseline. From one run of a run database it computes
 //  - the paper's study (Maidi et al. 2010, §3), per solver and per scope
@@ -276,7 +276,7 @@ std::vector<ComparedFigure> compare_runs(const RunStudy& candidate, const RunStu
 // report.json's "regressed".
 bool regressed(const std::vector<ComparedFigure>& comparison);
 
-// The paper's own values for a solver (DESIGN.md "Paper facts", Tables 2-6),
+// The paper's own values for a solver (Maidi et al. 2010, Tables 2-6),
 // for "analytic", "hybrid_oi", "ekf", "hybrid_ekf"; nullopt for others.
 struct PaperValues {
   std::string label;  // the paper's column heading, e.g. "H. EKF"
@@ -285,7 +285,7 @@ struct PaperValues {
   double slope, slope_se, intercept_m, intercept_se_m;                           // Table 4
   double residual_rms_m, residual_variance;                                      // Table 5
   double mean_error_m, error_variance, error_sd_m, time_us;                      // Table 6
-  double time_per_pose_us;  // DESIGN.md "Paper facts": per pose, Pentium III 1.1 GHz
+  double time_per_pose_us;  // paper §3: per pose, Pentium III 1.1 GHz
 };
 std::optional<PaperValues> paper_values(const std::string& solver);
 

@@ -1,4 +1,4 @@
-// Run comparison (issue 7 §4): is a figure of this run different from the
+// Run comparison: is a figure of this run different from the
 // baseline's by more than its statistical uncertainty? A difference is
 // flagged only when |difference| > k * standard error.
 //

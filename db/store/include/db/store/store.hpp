@@ -1,5 +1,5 @@
 #pragma once
-// db::store::Store: the run database of a sweep (DESIGN.md "Database", issue 6 §3).
+// db::store::Store: the run database of a sweep (docs/database.md).
 //
 // One SQLite file holds any number of runs. Each run stores what it was run
 // with (configuration and plan as JSON, copies of the files it read with their

@@ -1,4 +1,4 @@
-// rig::sweep::Controller: the sweep (issue 6 §2, §4). For each plan position the run
+// rig::sweep::Controller: the sweep (docs/data-flow.md). For each plan position the run
 // does not have yet, in plan order: move, wait_settled, trigger and grab N
 // frames, detect, run every solver on the pose marker and on the whole
 // target, compute the truth from the bench's READ-BACK position and the rig

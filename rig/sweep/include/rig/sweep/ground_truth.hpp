@@ -1,5 +1,5 @@
 // rig::sweep::ground_truth_at: what the rig geometry says the camera should see with
-// the carriage at a bench position (issue 6 §2, issue 7 §3): the true pose and
+// the carriage at a bench position (docs/frames.md): the true pose and
 // camera-target distance, the viewing angle, the markers in view with their
 // size in pixels, and the Cramér-Rao bound on the distance of any unbiased
 // solver, per scope.

@@ -1,4 +1,4 @@
-// Replay of a recorded sweep (issue 6 §3): `rig sweep SWEEP.toml --replay RUN`
+// Replay of a recorded sweep: `rig sweep SWEEP.toml --replay RUN`
 // measures the raw frames a run saved (sweep file `[capture] save_frames`)
 // again, with the solvers, calibration, target layout and rig geometry of
 // today, into a new run.

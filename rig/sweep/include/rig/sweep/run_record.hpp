@@ -1,4 +1,4 @@
-// What a run database holds about a sweep besides its positions (issue 6 §3):
+// What a run database holds about a sweep besides its positions (docs/database.md):
 // the run's description (the sweep file and every file it names as stored
 // copies with their SHA-256, the resolved configuration, the plan, software
 // and library versions, host), and the checks a resume makes against it.

@@ -1,8 +1,8 @@
 // Telemetry and control of a sweep over ZeroMQ.
 //
 // A sweep publishes one JSON object per message on an XPUB socket (run start,
-// one per position, faults, state changes, run stop; see DESIGN.md and the
-// message shapes in progress_view.hpp) and answers `status`, `pause`, `resume`
+// one per position, faults, state changes, run stop; see docs/telemetry.md
+// and the message shapes in progress_view.hpp) and answers `status`, `pause`, `resume`
 // and `abort` on a REP socket. `rig monitor` and `rig ctl` are the clients.
 //
 // ZeroMQ context: every object here uses one process-wide zmq::context_t,

@@ -10,7 +10,7 @@
 
 namespace sim::bench {
 
-// Alarm codes of the simulated drive (DESIGN.md default map).
+// Alarm codes of the simulated drive (docs/register-map.md).
 enum AlarmCode : int {
   kAlarmNone = 0,
   kAlarmLimit = 1,           // target outside the travel

@@ -1,6 +1,6 @@
 // sim::bench::BenchServer: the simulated XY bench as a real Modbus server (libmodbus)
-// serving a drive profile's register map, by default DESIGN.md's map from
-// config/benches/sim.toml. Over TCP on loopback it serves several clients at
+// serving a drive profile's register map, by default rig's own map
+// (docs/register-map.md) from config/benches/sim.toml. Over TCP on loopback it serves several clients at
 // once; it can also serve one RTU serial line (e.g. one end of a socat pty
 // pair). Any Modbus client (ModbusBench, mbpoll, a PLC) can drive it.
 //
