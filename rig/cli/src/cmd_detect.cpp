@@ -94,17 +94,16 @@ void print_text(const std::string& image, const vision::FrameMeasurement& m) {
 }
 
 // Returns false when the image could not be used (the error is printed).
-bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer, bool json) {
+// `calibration` names the calibration in messages.
+bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer,
+                const std::string& calibration, bool json) {
   vision::FrameMeasurement m;
   std::string error;
   try {
     const cv::Mat image = vision::read_image(path);
-    const auto& camera = measurer.camera();
-    if (image.cols != camera.width_px() || image.rows != camera.height_px())
-      throw vision::ImageError(
-          "image '" + path + "': is " + std::to_string(image.cols) + "x" +
-          std::to_string(image.rows) + " px but the camera calibration is for " +
-          std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) + " px");
+    if (const auto mismatch = measurer.camera().image_size_mismatch(
+            image.size(), "image '" + path + "'", calibration))
+      throw vision::ImageError(*mismatch + "; expected an image at the calibration's resolution");
     m = measurer.measure(image);
   } catch (const vision::ImageError& e) {
     error = e.what();
@@ -166,9 +165,11 @@ int run_detect(const Options& o) {
       return kExitBadInput;
     }
   const vision::FrameMeasurer measurer(*camera, *target);
+  const std::string calibration = o.camera_file.empty() ? "the built-in paper camera (no --camera)"
+                                                        : "calibration '" + o.camera_file + "'";
   bool all_ok = true;
   for (const auto& image : o.images)
-    all_ok = detect_one(image, measurer, o.json) && all_ok;
+    all_ok = detect_one(image, measurer, calibration, o.json) && all_ok;
   return all_ok ? kExitOk : kExitBadInput;
 }
 

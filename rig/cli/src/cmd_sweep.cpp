@@ -101,15 +101,11 @@ class BadInput : public std::runtime_error {
 void check_camera(vision::FrameSource& camera, const sweep::SweepConfig& config) {
   camera.trigger();
   const vision::Frame frame = camera.grab(config.faults.grab_timeout);
-  const vision::Camera& model = config.camera;
-  if (frame.image.cols != model.width_px() || frame.image.rows != model.height_px()) {
-    throw BadInput(config.sweep_file +
-                   ": capture.calibration: " + config.calibration_description() + " is for " +
-                   std::to_string(model.width_px()) + "x" + std::to_string(model.height_px()) +
-                   " px but camera " + config.camera_spec + " delivers " +
-                   std::to_string(frame.image.cols) + "x" + std::to_string(frame.image.rows) +
-                   " px; expected the calibration of this camera at this resolution");
-  }
+  if (const auto mismatch = config.camera.image_size_mismatch(
+          frame.image.size(), "a frame of camera " + config.camera_spec,
+          config.calibration_description()))
+    throw BadInput(config.sweep_file + ": capture.calibration: " + *mismatch +
+                   "; expected the calibration of this camera at this resolution");
 }
 
 // Opens the camera and checks one frame. A GigE camera whose previous
