@@ -19,7 +19,6 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +27,6 @@
 #include "vision/detector.hpp"
 #include "vision/detector_image.hpp"
 #include "vision/frame_measurement.hpp"
-#include "vision/solvers.hpp"
 #include "vision/target.hpp"
 
 namespace rig::cli {
@@ -143,28 +141,16 @@ bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer,
 }
 
 int run_detect(const Options& o) {
-  std::optional<vision::Camera> camera;
-  std::optional<vision::Target> target;
-  try {
-    camera = o.camera_file.empty() ? vision::Camera::paper_default()
-                                   : vision::Camera::load(o.camera_file);
-    target = o.target_file.empty() ? vision::Target::paper_default()
-                                   : vision::Target::load(o.target_file);
-  } catch (const vision::CalibrationError& e) {
-    std::cerr << "rig detect: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::TargetError& e) {
-    std::cerr << "rig detect: " << e.what() << "\n";
-    return kExitBadInput;
-  }
+  const vision::Camera camera =
+      o.camera_file.empty() ? vision::Camera::paper_default() : vision::Camera::load(o.camera_file);
+  const vision::Target target =
+      o.target_file.empty() ? vision::Target::paper_default() : vision::Target::load(o.target_file);
   const vision::Codebook codebook;
-  for (const auto& m : target->markers)
-    if (m.id < 0 || static_cast<size_t>(m.id) >= codebook.size()) {
-      std::cerr << "rig detect: target marker id " << m.id << " is not in the codebook (ids 0-"
-                << codebook.size() - 1 << ")\n";
-      return kExitBadInput;
-    }
-  const vision::FrameMeasurer measurer(*camera, *target);
+  for (const auto& m : target.markers)
+    if (m.id < 0 || static_cast<size_t>(m.id) >= codebook.size())
+      throw BadInput("target marker id " + std::to_string(m.id) +
+                     " is not in the codebook (ids 0-" + std::to_string(codebook.size() - 1) + ")");
+  const vision::FrameMeasurer measurer(camera, target);
   const std::string calibration = o.camera_file.empty() ? "the built-in paper camera (no --camera)"
                                                         : "calibration '" + o.camera_file + "'";
   bool all_ok = true;
@@ -199,7 +185,8 @@ void add_detect_command(CLI::App& app, ExitStatus& status) {
       "Exit codes: 0 ok, 2 bad input (an unreadable, empty, truncated or non-image file, an\n"
       "image whose size is not the camera's, a bad calibration or target file); the other\n"
       "images are still processed.");
-  cmd->callback([&status, o] { status.code = run_detect(*o); });
+  cmd->callback(
+      [&status, o] { status.code = run_command("detect", [&] { return run_detect(*o); }); });
 }
 
 }  // namespace rig::cli

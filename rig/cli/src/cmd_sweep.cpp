@@ -24,10 +24,8 @@
 #include "commands.hpp"
 #include "db/store/store.hpp"
 #include "motion/bench_url.hpp"
-#include "motion/errors.hpp"
 #include "motion/modbus_bench.hpp"
 #include "rig/sweep/controller.hpp"
-#include "rig/sweep/run_record.hpp"
 #include "rig/sweep/run_start.hpp"
 #include "rig/sweep/sweep_camera.hpp"
 #include "rig/sweep/sweep_config.hpp"
@@ -47,11 +45,6 @@ struct SweepArgs {
   int wait_subscribers = 0;
   double wait_subscribers_s = 10;
   bool no_progress = false;
-};
-
-class BadInput : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
 };
 
 // Waits for the subscribers --wait-subscribers asks for; says so when they
@@ -216,41 +209,8 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1\n"
       "Replay run 1's saved frames (no rig needed) into a new run:\n"
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --replay 1");
-  cmd->callback([&status, args] {
-    try {
-      status.code = run_sweep(*args);
-    } catch (const sweep::SweepConfigError& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const sweep::PlanError& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const BadInput& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const sweep::RunMismatch& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const db::store::SchemaError& e) {
-      std::cerr << "rig sweep: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const telemetry::EndpointError& e) {
-      std::cerr << "rig sweep: telemetry: " << e.what() << "\n";
-      status.code = kExitBadInput;
-    } catch (const telemetry::TelemetryError& e) {  // e.g. the port is taken by another sweep
-      std::cerr << "rig sweep: telemetry: " << e.what() << "\n";
-      status.code = kExitFailure;
-    } catch (const vision::CaptureError& e) {
-      std::cerr << "rig sweep: camera: " << e.what() << "\n";
-      status.code = kExitFailure;
-    } catch (const motion::BenchError& e) {
-      std::cerr << "rig sweep: bench: " << e.what() << "\n";
-      status.code = kExitFailure;
-    } catch (const db::store::StoreError& e) {
-      std::cerr << "rig sweep: database: " << e.what() << "\n";
-      status.code = kExitFailure;
-    }
-  });
+  cmd->callback(
+      [&status, args] { status.code = run_command("sweep", [&] { return run_sweep(*args); }); });
 }
 
 }  // namespace rig::cli
