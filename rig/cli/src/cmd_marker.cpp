@@ -10,8 +10,9 @@
 namespace rig::cli {
 namespace {
 
-// Bad input (exit 2) is told apart from a failure to write (exit 1) by
-// checking the input first: both are vision::ArtworkError.
+// The input, checked before anything is written. An unknown extension is a
+// vision::ArtworkError, as is a file that cannot be written; write_marker
+// runs this through read_input to tell them apart (exit 2, not 1).
 void check_marker(const vision::Codebook& codebook, int id,
                   const vision::MarkerArtworkOptions& options, const std::string& out) {
   vision::artwork_format_from_path(out);

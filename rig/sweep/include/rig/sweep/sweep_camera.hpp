@@ -17,9 +17,9 @@ namespace rig::sweep {
 // that died. A GigE Vision camera serves one controller at a time and keeps
 // serving it until that controller's heartbeat stops for the camera's
 // heartbeat timeout (GigE Vision bootstrap register "Heartbeat Timeout",
-// 3 s by default, often set longer on slow links). A controller killed with
-// -9, or whose host lost power, never releases the camera: until the timeout
-// expires the camera refuses a new controller or sends it nothing.
+// 0x0938: 3 s by default, often set longer on slow links). A controller
+// killed with -9, or whose host lost power, never releases the camera: until
+// the timeout expires the camera refuses a new controller or sends it nothing.
 struct HeldCameraPolicy {
   // 15 s: five default heartbeat timeouts, so that a camera configured for a
   // few times the default is still waited out; a camera that still refuses
