@@ -182,6 +182,17 @@ bool Camera::has_distortion() const {
   return d.k1 != 0 || d.k2 != 0 || d.p1 != 0 || d.p2 != 0 || d.k3 != 0;
 }
 
+std::optional<std::string> Camera::image_size_mismatch(const cv::Size& image_size,
+                                                       const std::string& image,
+                                                       const std::string& calibration) const {
+  if (image_size.width == width_px_ && image_size.height == height_px_) return std::nullopt;
+  const auto size_text = [](int width, int height) {
+    return std::to_string(width) + "x" + std::to_string(height) + " px";
+  };
+  return calibration + " is for " + size_text(width_px_, height_px_) + " but " + image + " is " +
+         size_text(image_size.width, image_size.height);
+}
+
 Eigen::Matrix3d Camera::K() const {
   Eigen::Matrix3d k;
   k << intrinsics_.fx, 0, intrinsics_.cx, 0, intrinsics_.fy, intrinsics_.cy, 0, 0, 1;

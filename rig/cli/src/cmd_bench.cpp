@@ -4,13 +4,11 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
-#include <sstream>
 #include <string>
 
 #include "commands.hpp"
 #include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
-#include "motion/errors.hpp"
 #include "motion/modbus_bench.hpp"
 
 namespace rig::cli {
@@ -32,27 +30,19 @@ void print(const motion::BenchStatus& s) {
             << (s.alarm_code ? " (" + s.alarm_meaning + ")" : std::string()) << "\n";
 }
 
-// Connects, runs `action` and maps the errors to exit codes: bad input
-// (profile, URL, soft limits) 2, anything the bench did 1.
+// Connects, runs `action` and prints the bench's status; errors give the
+// exit code (run_command): bad input (profile, URL, soft limits) 2, anything
+// the bench did 1.
 template <class Action>
 int with_bench(const BenchArgs& a, Action action) {
-  try {
+  return run_command("bench", [&] {
     motion::ModbusBench bench(motion::BenchUrl::parse(a.url),
                               motion::load_drive_profile(a.profile));
     if (a.speed_mm_s > 0) bench.set_speed(a.speed_mm_s);
     action(bench);
     print(bench.status());
     return kExitOk;
-  } catch (const motion::ProfileError& e) {
-    std::cerr << "rig bench: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const motion::SoftLimitError& e) {
-    std::cerr << "rig bench: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const motion::BenchError& e) {
-    std::cerr << "rig bench: " << e.what() << "\n";
-    return kExitFailure;
-  }
+  });
 }
 
 std::chrono::milliseconds settle_timeout(const motion::ModbusBench& b) {

@@ -31,24 +31,17 @@ std::string frame_file(int index) {
   return name;
 }
 
-int run_capture(CaptureArgs& args) {
-  args.options.software_trigger = args.trigger == "software";
-  std::unique_ptr<vision::FrameSource> source;
-  try {
-    source = vision::make_frame_source(args.camera, args.options);
-    std::filesystem::create_directories(args.out);
-  } catch (const std::exception& e) {
-    std::cerr << "rig capture: " << e.what() << "\n";
-    return kExitBadInput;
-  }
+// Opens the source and saves args.frames frames; returns how many were
+// saved. A failure ends it, printed, so that the summary can still say what
+// was saved and what the source counted.
+int save_frames(const CaptureArgs& args, vision::FrameSource& source) {
   int saved = 0;
-  const auto start = std::chrono::steady_clock::now();
   try {
-    source->open();
+    source.open();
     for (int i = 0; i < args.frames; ++i) {
       const auto t0 = std::chrono::steady_clock::now();
-      source->trigger();
-      const vision::Frame frame = source->grab(std::chrono::milliseconds(args.timeout_ms));
+      source.trigger();
+      const vision::Frame frame = source.grab(std::chrono::milliseconds(args.timeout_ms));
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       const std::string path = (std::filesystem::path(args.out) / frame_file(i)).string();
@@ -58,11 +51,23 @@ int run_capture(CaptureArgs& args) {
                 << frame.frame_id << "  camera_ts_ns " << frame.camera_timestamp_ns << "  " << ms
                 << " ms\n";
     }
-  } catch (const vision::EndOfFrames& e) {
+  } catch (const vision::EndOfFrames& e) {  // a replay folder that ran out, told with the summary
     std::cout << "rig capture: " << e.what() << "\n";
   } catch (const std::exception& e) {
     std::cerr << "rig capture: " << e.what() << "\n";
   }
+  return saved;
+}
+
+int run_capture(CaptureArgs& args) {
+  args.options.software_trigger = args.trigger == "software";
+  std::unique_ptr<vision::FrameSource> source;
+  read_input("", [&] {
+    source = vision::make_frame_source(args.camera, args.options);
+    std::filesystem::create_directories(args.out);
+  });
+  const auto start = std::chrono::steady_clock::now();
+  const int saved = save_frames(args, *source);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const vision::CaptureCounters c = source->counters();
@@ -107,7 +112,9 @@ void add_capture_command(CLI::App& app, ExitStatus& status) {
       "input.\n"
       "Example: rig capture --camera gige:127.0.0.1 --frames 10 --out /tmp/frames "
       "--trigger software");
-  cmd->callback([&status, args] { status.code = run_capture(*args); });
+  cmd->callback([&status, args] {
+    status.code = run_command("capture", [&] { return run_capture(*args); });
+  });
 }
 
 }  // namespace rig::cli

@@ -41,25 +41,17 @@ void print_reply(const CtlArgs& a, const nlohmann::json& reply) {
 }
 
 int run_ctl(const CtlArgs& a) {
-  try {
-    telemetry::validate_endpoint(a.endpoint, /*allow_remote=*/true, "--endpoint");
-    const nlohmann::json reply = telemetry::send_control(
-        a.endpoint, a.command, std::chrono::milliseconds(a.timeout_ms), a.reason);
-    if (a.json) std::cout << reply.dump() << "\n";
-    if (!reply.value("ok", false)) {
-      std::cerr << "rig ctl: the sweep refused \"" << a.command
-                << "\": " << reply.value("error", std::string("no reason given")) << "\n";
-      return kExitFailure;
-    }
-    if (!a.json) print_reply(a, reply);
-    return kExitOk;
-  } catch (const telemetry::EndpointError& e) {
-    std::cerr << "rig ctl: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const telemetry::TelemetryError& e) {
-    std::cerr << "rig ctl: " << e.what() << "\n";
+  telemetry::validate_endpoint(a.endpoint, /*allow_remote=*/true, "--endpoint");
+  const nlohmann::json reply = telemetry::send_control(
+      a.endpoint, a.command, std::chrono::milliseconds(a.timeout_ms), a.reason);
+  if (a.json) std::cout << reply.dump() << "\n";
+  if (!reply.value("ok", false)) {
+    std::cerr << "rig ctl: the sweep refused \"" << a.command
+              << "\": " << reply.value("error", std::string("no reason given")) << "\n";
     return kExitFailure;
   }
+  if (!a.json) print_reply(a, reply);
+  return kExitOk;
 }
 
 }  // namespace
@@ -91,7 +83,8 @@ void add_ctl_command(CLI::App& app, ExitStatus& status) {
       "2 bad input.\n"
       "Example: rig ctl pause\n"
       "         rig ctl abort --reason \"lens cap on\" --endpoint tcp://127.0.0.1:5557");
-  cmd->callback([&status, args] { status.code = run_ctl(*args); });
+  cmd->callback(
+      [&status, args] { status.code = run_command("ctl", [&] { return run_ctl(*args); }); });
 }
 
 }  // namespace rig::cli

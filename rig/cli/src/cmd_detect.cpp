@@ -19,7 +19,6 @@
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,7 +27,6 @@
 #include "vision/detector.hpp"
 #include "vision/detector_image.hpp"
 #include "vision/frame_measurement.hpp"
-#include "vision/solvers.hpp"
 #include "vision/target.hpp"
 
 namespace rig::cli {
@@ -94,17 +92,16 @@ void print_text(const std::string& image, const vision::FrameMeasurement& m) {
 }
 
 // Returns false when the image could not be used (the error is printed).
-bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer, bool json) {
+// `calibration` names the calibration in messages.
+bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer,
+                const std::string& calibration, bool json) {
   vision::FrameMeasurement m;
   std::string error;
   try {
     const cv::Mat image = vision::read_image(path);
-    const auto& camera = measurer.camera();
-    if (image.cols != camera.width_px() || image.rows != camera.height_px())
-      throw vision::ImageError(
-          "image '" + path + "': is " + std::to_string(image.cols) + "x" +
-          std::to_string(image.rows) + " px but the camera calibration is for " +
-          std::to_string(camera.width_px()) + "x" + std::to_string(camera.height_px()) + " px");
+    if (const auto mismatch = measurer.camera().image_size_mismatch(
+            image.size(), "image '" + path + "'", calibration))
+      throw vision::ImageError(*mismatch + "; expected an image at the calibration's resolution");
     m = measurer.measure(image);
   } catch (const vision::ImageError& e) {
     error = e.what();
@@ -144,31 +141,21 @@ bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer, 
 }
 
 int run_detect(const Options& o) {
-  std::optional<vision::Camera> camera;
-  std::optional<vision::Target> target;
-  try {
-    camera = o.camera_file.empty() ? vision::Camera::paper_default()
-                                   : vision::Camera::load(o.camera_file);
-    target = o.target_file.empty() ? vision::Target::paper_default()
-                                   : vision::Target::load(o.target_file);
-  } catch (const vision::CalibrationError& e) {
-    std::cerr << "rig detect: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::TargetError& e) {
-    std::cerr << "rig detect: " << e.what() << "\n";
-    return kExitBadInput;
-  }
+  const vision::Camera camera =
+      o.camera_file.empty() ? vision::Camera::paper_default() : vision::Camera::load(o.camera_file);
+  const vision::Target target =
+      o.target_file.empty() ? vision::Target::paper_default() : vision::Target::load(o.target_file);
   const vision::Codebook codebook;
-  for (const auto& m : target->markers)
-    if (m.id < 0 || static_cast<size_t>(m.id) >= codebook.size()) {
-      std::cerr << "rig detect: target marker id " << m.id << " is not in the codebook (ids 0-"
-                << codebook.size() - 1 << ")\n";
-      return kExitBadInput;
-    }
-  const vision::FrameMeasurer measurer(*camera, *target);
+  for (const auto& m : target.markers)
+    if (m.id < 0 || static_cast<size_t>(m.id) >= codebook.size())
+      throw BadInput("target marker id " + std::to_string(m.id) +
+                     " is not in the codebook (ids 0-" + std::to_string(codebook.size() - 1) + ")");
+  const vision::FrameMeasurer measurer(camera, target);
+  const std::string calibration = o.camera_file.empty() ? "the built-in paper camera (no --camera)"
+                                                        : "calibration '" + o.camera_file + "'";
   bool all_ok = true;
   for (const auto& image : o.images)
-    all_ok = detect_one(image, measurer, o.json) && all_ok;
+    all_ok = detect_one(image, measurer, calibration, o.json) && all_ok;
   return all_ok ? kExitOk : kExitBadInput;
 }
 
@@ -198,7 +185,8 @@ void add_detect_command(CLI::App& app, ExitStatus& status) {
       "Exit codes: 0 ok, 2 bad input (an unreadable, empty, truncated or non-image file, an\n"
       "image whose size is not the camera's, a bad calibration or target file); the other\n"
       "images are still processed.");
-  cmd->callback([&status, o] { status.code = run_detect(*o); });
+  cmd->callback(
+      [&status, o] { status.code = run_command("detect", [&] { return run_detect(*o); }); });
 }
 
 }  // namespace rig::cli

@@ -8,6 +8,37 @@
 #include "vision/codebook.hpp"
 
 namespace rig::cli {
+namespace {
+
+// The input, checked before anything is written. An unknown extension is a
+// vision::ArtworkError, as is a file that cannot be written; write_marker
+// runs this through read_input to tell them apart (exit 2, not 1).
+void check_marker(const vision::Codebook& codebook, int id,
+                  const vision::MarkerArtworkOptions& options, const std::string& out) {
+  vision::artwork_format_from_path(out);
+  if (id < 0 || static_cast<size_t>(id) >= codebook.size())
+    throw BadInput("--id " + std::to_string(id) + ": expected 0 .. " +
+                   std::to_string(codebook.size() - 1));
+  if (!(options.side_mm > 0) || options.quiet_cells < 0 ||
+      !(options.dpi >= 10 && options.dpi <= 4800))
+    throw BadInput("--size-mm must be > 0, --quiet-cells >= 0 and --dpi in 10 .. 4800 (got " +
+                   std::to_string(options.side_mm) + ", " + std::to_string(options.quiet_cells) +
+                   ", " + std::to_string(options.dpi) + ")");
+}
+
+int write_marker(int id, const vision::MarkerArtworkOptions& options, const std::string& out) {
+  const vision::Codebook codebook;
+  read_input("", [&] { check_marker(codebook, id, options, out); });
+  vision::write_marker_artwork(codebook, id, options, out);
+  const double page_mm =
+      options.side_mm * (vision::kMarkerCells + 2 * options.quiet_cells) / vision::kMarkerCells;
+  std::cout << "wrote marker id " << id << " (code 0x" << std::hex << codebook.code(id) << std::dec
+            << "), " << options.side_mm << " mm, page " << page_mm << " x " << page_mm << " mm, to "
+            << out << "\n";
+  return kExitOk;
+}
+
+}  // namespace
 
 void add_marker_command(CLI::App& app, ExitStatus& status) {
   auto* cmd = app.add_subcommand(
@@ -31,40 +62,7 @@ void add_marker_command(CLI::App& app, ExitStatus& status) {
       "Print at 100 % (actual size), never 'fit to page', and check the side with a ruler.");
   cmd->callback([&status, args, id, out, no_label] {
     args->label = !*no_label;
-    const vision::Codebook codebook;
-    // Bad input (exit 2) is told apart from a failure to write (exit 1) by
-    // checking the input first.
-    try {
-      vision::artwork_format_from_path(*out);
-      if (*id < 0 || static_cast<size_t>(*id) >= codebook.size()) {
-        throw vision::ArtworkError("--id " + std::to_string(*id) + ": expected 0 .. " +
-                                   std::to_string(codebook.size() - 1));
-      }
-      if (!(args->side_mm > 0) || args->quiet_cells < 0 ||
-          !(args->dpi >= 10 && args->dpi <= 4800)) {
-        throw vision::ArtworkError(
-            "--size-mm must be > 0, --quiet-cells >= 0 and --dpi in 10 .. 4800 (got " +
-            std::to_string(args->side_mm) + ", " + std::to_string(args->quiet_cells) + ", " +
-            std::to_string(args->dpi) + ")");
-      }
-    } catch (const vision::ArtworkError& e) {
-      std::cerr << "rig marker: " << e.what() << "\n";
-      status.code = kExitBadInput;
-      return;
-    }
-    try {
-      vision::write_marker_artwork(codebook, *id, *args, *out);
-    } catch (const vision::ArtworkError& e) {
-      std::cerr << "rig marker: " << e.what() << "\n";
-      status.code = kExitFailure;
-      return;
-    }
-    const double page_mm =
-        args->side_mm * (vision::kMarkerCells + 2 * args->quiet_cells) / vision::kMarkerCells;
-    std::cout << "wrote marker id " << *id << " (code 0x" << std::hex << codebook.code(*id)
-              << std::dec << "), " << args->side_mm << " mm, page " << page_mm << " x " << page_mm
-              << " mm, to " << *out << "\n";
-    status.code = kExitOk;
+    status.code = run_command("marker", [&] { return write_marker(*id, *args, *out); });
   });
 }
 

@@ -1,8 +1,9 @@
 // rig monitor: a live view of a running sweep from its telemetry.
+#include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 
@@ -39,65 +40,62 @@ std::string seconds_text(double s) {
   return t.str();
 }
 
+// Shows one message as the output mode wants it.
+void show(const MonitorArgs& a, bool live, const telemetry::ProgressView& view,
+          const nlohmann::json& message) {
+  if (a.json)
+    std::cout << message.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n"
+              << std::flush;
+  else if (live)
+    redraw(view);
+  else
+    std::cout << view.describe(message) << "\n" << std::flush;
+}
+
 int run_monitor(const MonitorArgs& a) {
   using Clock = std::chrono::steady_clock;
-  try {
-    telemetry::validate_endpoint(a.endpoint, /*allow_remote=*/true, "--endpoint");
-    telemetry::TelemetrySubscriber subscriber(a.endpoint);
-    const bool live = !a.json && !a.plain && telemetry::stdout_is_terminal();
-    telemetry::ProgressView view;
-    if (live) {
-      std::cout << "\x1b[2J";
-      redraw(view);
+  telemetry::validate_endpoint(a.endpoint, /*allow_remote=*/true, "--endpoint");
+  telemetry::TelemetrySubscriber subscriber(a.endpoint);
+  const bool live = !a.json && !a.plain && telemetry::stdout_is_terminal();
+  telemetry::ProgressView view;
+  if (live) {
+    std::cout << "\x1b[2J";
+    redraw(view);
+  }
+  const auto silence_limit =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.timeout_s));
+  auto last_message = Clock::now();
+  for (;;) {
+    // Wake at least once a second so a live view follows terminal resizes.
+    auto wait = std::chrono::milliseconds(1000);
+    if (a.timeout_s > 0) {
+      const auto left =
+          std::chrono::ceil<std::chrono::milliseconds>(last_message + silence_limit - Clock::now());
+      if (left.count() <= 0) {
+        if (live) std::cout << "\n";
+        std::cerr << "rig monitor: no telemetry from " << a.endpoint << " within "
+                  << seconds_text(a.timeout_s) << " s (is a sweep running and publishing there?)\n";
+        return kExitFailure;
+      }
+      wait = std::min(wait, left);
     }
-    const auto silence_limit =
-        std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(a.timeout_s));
-    auto last_message = Clock::now();
-    for (;;) {
-      // Wake at least once a second so a live view follows terminal resizes.
-      auto wait = std::chrono::milliseconds(1000);
-      if (a.timeout_s > 0) {
-        const auto left = std::chrono::ceil<std::chrono::milliseconds>(
-            last_message + silence_limit - Clock::now());
-        if (left.count() <= 0) {
-          if (live) std::cout << "\n";
-          std::cerr << "rig monitor: no telemetry from " << a.endpoint << " within "
-                    << seconds_text(a.timeout_s)
-                    << " s (is a sweep running and publishing there?)\n";
-          return kExitFailure;
-        }
-        wait = std::min(wait, left);
-      }
-      std::optional<nlohmann::json> message;
-      try {
-        message = subscriber.receive(wait);
-      } catch (const telemetry::TelemetryError& e) {
-        std::cerr << "rig monitor: " << e.what() << "\n";  // one bad message; keep listening
-        last_message = Clock::now();
-        continue;
-      }
-      if (!message) {
-        if (live) redraw(view);
-        continue;
-      }
+    std::optional<nlohmann::json> message;
+    try {
+      message = subscriber.receive(wait);
+    } catch (const telemetry::TelemetryError& e) {
+      std::cerr << "rig monitor: " << e.what() << "\n";  // one bad message; keep listening
       last_message = Clock::now();
-      view.update(*message);
-      if (a.json)
-        std::cout << message->dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) << "\n"
-                  << std::flush;
-      else if (live)
-        redraw(view);
-      else
-        std::cout << view.describe(*message) << "\n" << std::flush;
-      if (a.until_stop && message->value("type", std::string()) == "run_stop")
-        return message->value("status", std::string()) == "completed" ? kExitOk : kExitFailure;
+      continue;
     }
-  } catch (const telemetry::EndpointError& e) {
-    std::cerr << "rig monitor: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const telemetry::TelemetryError& e) {
-    std::cerr << "rig monitor: " << e.what() << "\n";
-    return kExitFailure;
+    if (!message) {
+      if (live) redraw(view);
+      continue;
+    }
+    last_message = Clock::now();
+    view.update(*message);
+    show(a, live, view, *message);
+    if (a.until_stop && message->value("type", std::string()) == "run_stop")
+      return message->value("status", std::string()) == "completed" ? kExitOk : kExitFailure;
   }
 }
 
@@ -127,7 +125,9 @@ void add_monitor_command(CLI::App& app, ExitStatus& status) {
       "socket error, 2 bad input.\n"
       "Example: rig monitor\n"
       "         rig monitor --until-stop --timeout-s 60 --json > run.jsonl");
-  cmd->callback([&status, args] { status.code = run_monitor(*args); });
+  cmd->callback([&status, args] {
+    status.code = run_command("monitor", [&] { return run_monitor(*args); });
+  });
 }
 
 }  // namespace rig::cli

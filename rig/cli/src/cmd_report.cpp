@@ -15,12 +15,9 @@
 
 #include "commands.hpp"
 #include "db/report/report.hpp"
-#include "db/store/store.hpp"
 
 namespace rig::cli {
 namespace {
-
-constexpr int kExitRegression = 3;
 
 struct ReportArgs {
   std::string database;
@@ -31,41 +28,37 @@ struct ReportArgs {
   db::report::ReportOptions options;
 };
 
-int run_report(const ReportArgs& a) {
-  try {
-    db::report::ReportOptions options = a.options;
-    options.run_id = a.run_id;
-    std::optional<db::report::RunReference> baseline;
-    if (!a.baseline.empty()) baseline = db::report::RunReference::parse(a.baseline);
-    const db::report::Report report(a.database, options, baseline);
-    const db::report::ReportFiles files = report.write(a.out_dir);
-    const db::report::RunStudy& s = report.study();
-    std::cout << "run " << s.run.id << " of " << a.database << ": " << s.positions << " positions, "
-              << s.estimates << " estimates\n"
-              << files.html << "\n"
-              << files.json << "\n"
-              << files.csv.size() << " CSV tables in " << a.out_dir << "\n";
-    if (report.baseline()) {
-      std::size_t worse = 0;
-      for (const db::report::ComparedFigure& f : report.comparison()) {
-        if (!f.worse) continue;
-        ++worse;
-        std::cout << "worse: " << f.solver << " scope " << f.scope << ": " << f.figure << " "
-                  << f.candidate << " against " << f.baseline << " (z = " << f.difference.z
-                  << ")\n";
-      }
-      std::cout << (worse == 0 ? "no solver significantly worse than the baseline\n"
-                               : std::to_string(worse) + " figure(s) significantly worse\n");
-      if (worse > 0 && a.fail_on_regression) return kExitRegression;
-    }
-    return kExitOk;
-  } catch (const db::report::ReportInputError& e) {
-    std::cerr << "rig report: " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const std::exception& e) {
-    std::cerr << "rig report: " << e.what() << "\n";
-    return kExitFailure;
+// Prints every figure the candidate run got significantly worse in than the
+// baseline; returns how many.
+std::size_t print_regressions(const db::report::Report& report) {
+  std::size_t worse = 0;
+  for (const db::report::ComparedFigure& f : report.comparison()) {
+    if (!f.worse) continue;
+    ++worse;
+    std::cout << "worse: " << f.solver << " scope " << f.scope << ": " << f.figure << " "
+              << f.candidate << " against " << f.baseline << " (z = " << f.difference.z << ")\n";
   }
+  std::cout << (worse == 0 ? "no solver significantly worse than the baseline\n"
+                           : std::to_string(worse) + " figure(s) significantly worse\n");
+  return worse;
+}
+
+int run_report(const ReportArgs& a) {
+  db::report::ReportOptions options = a.options;
+  options.run_id = a.run_id;
+  std::optional<db::report::RunReference> baseline;
+  if (!a.baseline.empty()) baseline = db::report::RunReference::parse(a.baseline);
+  const db::report::Report report(a.database, options, baseline);
+  const db::report::ReportFiles files = report.write(a.out_dir);
+  const db::report::RunStudy& s = report.study();
+  std::cout << "run " << s.run.id << " of " << a.database << ": " << s.positions << " positions, "
+            << s.estimates << " estimates\n"
+            << files.html << "\n"
+            << files.json << "\n"
+            << files.csv.size() << " CSV tables in " << a.out_dir << "\n";
+  if (report.baseline() && print_regressions(report) > 0 && a.fail_on_regression)
+    return kExitRegression;
+  return kExitOk;
 }
 
 }  // namespace
@@ -107,7 +100,8 @@ void add_report_command(CLI::App& app, ExitStatus& status) {
       "Example: rig report runs.db --out report/\n"
       "         rig report runs.db --run 7 --baseline main.db:3 --fail-on-regression --out "
       "report/");
-  cmd->callback([&status, args] { status.code = run_report(*args); });
+  cmd->callback(
+      [&status, args] { status.code = run_command("report", [&] { return run_report(*args); }); });
 }
 
 }  // namespace rig::cli

@@ -47,7 +47,9 @@ void add_sim_command(CLI::App& app, ExitStatus& status) {
   sim->prefix_command();
   sim->set_help_flag();  // --help goes to rig-sim
   sim->footer("Example: rig sim --config config/sim.toml\n         rig sim bench --port 1502");
-  sim->callback([&status, sim] { status.code = exec_rig_sim(sim->remaining()); });
+  sim->callback([&status, sim] {
+    status.code = run_command("sim", [&] { return exec_rig_sim(sim->remaining()); });
+  });
 }
 
 }  // namespace rig::cli

@@ -1,11 +1,15 @@
 // rig solve FILE|-: every pose solver on one JSON problem, side by side.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
 #include <nlohmann/json.hpp>
-#include <sstream>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "estimate_json.hpp"
@@ -14,7 +18,8 @@
 namespace rig::cli {
 namespace {
 
-// Bad input to `rig solve`; the message names the file, the key and what was expected.
+// Bad input to `rig solve`; the message names the key and what was expected
+// (run_solve adds the problem's name).
 struct ProblemError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -149,17 +154,11 @@ int run_solve(const std::string& source, bool json) {
   const std::string name = source == "-" ? "standard input" : "'" + source + "'";
   Problem problem;
   vision::Correspondences c;
-  try {
+  read_input("problem " + name, [&] {
     problem = read_problem(source);
     c = vision::make_correspondences(*problem.camera, problem.object_points,
                                      problem.image_points_px);
-  } catch (const ProblemError& e) {
-    std::cerr << "rig solve: problem " << name << ": " << e.what() << "\n";
-    return kExitBadInput;
-  } catch (const vision::InputError& e) {
-    std::cerr << "rig solve: problem " << name << ": " << e.what() << "\n";
-    return kExitBadInput;
-  }
+  });
   std::vector<vision::Estimate> estimates;
   bool any_converged = false, any_behind = false;
   for (const auto& solver : vision::make_all_solvers()) {
@@ -201,7 +200,9 @@ void add_solve_command(CLI::App& app, ExitStatus& status) {
       "Example: rig solve config/problems/paper_marker.json --json\n"
       "Exit codes: 0 ok, 2 bad input (malformed JSON, fewer than 4 points, counts that differ,\n"
       "non-finite values, degenerate points, or no pose in front of the camera).");
-  cmd->callback([&status, source, json] { status.code = run_solve(*source, *json); });
+  cmd->callback([&status, source, json] {
+    status.code = run_command("solve", [&] { return run_solve(*source, *json); });
+  });
 }
 
 }  // namespace rig::cli

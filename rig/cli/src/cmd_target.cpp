@@ -9,6 +9,36 @@
 #include "vision/target.hpp"
 
 namespace rig::cli {
+namespace {
+
+// The layout, checked against the codebook before anything is written.
+vision::Target read_layout(const vision::Codebook& codebook, const std::string& layout) {
+  vision::Target target = vision::Target::load(layout);
+  for (const vision::TargetMarker& m : target.markers)
+    if (static_cast<size_t>(m.id) >= codebook.size())
+      throw vision::TargetError(layout + ": marker id " + std::to_string(m.id) +
+                                ": expected a codebook id 0 .. " +
+                                std::to_string(codebook.size() - 1));
+  return target;
+}
+
+int write_target(const std::string& layout, const vision::TargetArtworkOptions& options,
+                 const std::string& out) {
+  const vision::Codebook codebook;
+  vision::Target target;
+  // Bad input (exit 2) first: an unknown extension is an ArtworkError, as is
+  // a file that cannot be written (exit 1).
+  read_input("", [&] {
+    vision::artwork_format_from_path(out);
+    target = read_layout(codebook, layout);
+  });
+  vision::write_target_artwork(codebook, target, options, out);
+  std::cout << "wrote " << target.markers.size() << " markers on a " << target.sheet_width_m * 1000
+            << " x " << target.sheet_height_m * 1000 << " mm sheet to " << out << "\n";
+  return kExitOk;
+}
+
+}  // namespace
 
 void add_target_command(CLI::App& app, ExitStatus& status) {
   auto* cmd = app.add_subcommand(
@@ -29,34 +59,7 @@ void add_target_command(CLI::App& app, ExitStatus& status) {
       "Print at 100 % (actual size), never 'fit to page', and check a marker side with a ruler.");
   cmd->callback([&status, layout, out, options, no_label] {
     options->label = !*no_label;
-    const vision::Codebook codebook;
-    vision::Target target;
-    try {
-      vision::artwork_format_from_path(*out);
-      target = vision::Target::load(*layout);
-      for (const vision::TargetMarker& m : target.markers) {
-        if (static_cast<size_t>(m.id) >= codebook.size()) {
-          throw vision::TargetError(*layout + ": marker id " + std::to_string(m.id) +
-                                    ": expected a codebook id 0 .. " +
-                                    std::to_string(codebook.size() - 1));
-        }
-      }
-    } catch (const std::runtime_error& e) {  // ArtworkError or TargetError: the input
-      std::cerr << "rig target: " << e.what() << "\n";
-      status.code = kExitBadInput;
-      return;
-    }
-    try {
-      vision::write_target_artwork(codebook, target, *options, *out);
-    } catch (const std::runtime_error& e) {
-      std::cerr << "rig target: " << e.what() << "\n";
-      status.code = kExitFailure;
-      return;
-    }
-    std::cout << "wrote " << target.markers.size() << " markers on a "
-              << target.sheet_width_m * 1000 << " x " << target.sheet_height_m * 1000
-              << " mm sheet to " << *out << "\n";
-    status.code = kExitOk;
+    status.code = run_command("target", [&] { return write_target(*layout, *options, *out); });
   });
 }
 

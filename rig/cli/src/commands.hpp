@@ -1,28 +1,24 @@
 // The subcommands of `rig`. Each lives in its own cmd_<name>.cpp, adds itself
 // to the app with its options, --help text and an example, and returns the
-// process exit code through the callback it installs.
-//
-// Exit codes shared by every subcommand: 0 success, 1 a failure while running
-// (hardware, I/O), 2 bad input (the message names the input and what was expected).
+// process exit code through the callback it installs, which runs the
+// command's body through run_command (exit_codes.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
 
-namespace rig::cli {
+#include "exit_codes.hpp"
 
-constexpr int kExitOk = 0;
-constexpr int kExitFailure = 1;
-constexpr int kExitBadInput = 2;
+namespace rig::cli {
 
 // Set by a subcommand's callback; main() returns it.
 struct ExitStatus {
   int code = kExitOk;
 };
 
-// rig marker --id N --size-mm 50 --out FILE (cmd_marker.cpp).
 // rig solve FILE|- (cmd_solve.cpp).
 void add_solve_command(CLI::App& app, ExitStatus& status);
 
+// rig marker --id N --size-mm 50 --out FILE (cmd_marker.cpp).
 void add_marker_command(CLI::App& app, ExitStatus& status);
 // rig target --target FILE --out FILE (cmd_target.cpp).
 void add_target_command(CLI::App& app, ExitStatus& status);

@@ -30,10 +30,6 @@ std::string xy_text(double x_mm, double y_mm) {
   return "(" + exact(x_mm) + ", " + exact(y_mm) + ") mm";
 }
 
-std::string size_text(int width, int height) {
-  return std::to_string(width) + "x" + std::to_string(height) + " px";
-}
-
 // Reads a saved frame: the file's bytes, their SHA-256 checked against the
 // stored one, then decoded unchanged. Returns an empty image and sets `error`
 // (naming the file and what is wrong) when any step fails.
@@ -268,15 +264,11 @@ SweepConfig replay_config(const SweepConfig& config, const RecordedRun& recorded
         if (first_error.empty()) first_error = error;
         continue;
       }
-      const vision::Camera& model = config.camera;
-      if (image.cols != model.width_px() || image.rows != model.height_px()) {
-        throw RunMismatch(config.sweep_file +
-                          ": capture.calibration: " + config.calibration_description() +
-                          " is for " + size_text(model.width_px(), model.height_px()) +
-                          " but the frames of " + recorded.describe() + " (first: " + f.image_path +
-                          ") are " + size_text(image.cols, image.rows) +
-                          "; expected the calibration of the camera that recorded them");
-      }
+      if (const auto mismatch = config.camera.image_size_mismatch(
+              image.size(), "frame " + f.image_path + " of " + recorded.describe(),
+              config.calibration_description()))
+        throw RunMismatch(config.sweep_file + ": capture.calibration: " + *mismatch +
+                          "; expected the calibration of the camera that recorded it");
       SweepConfig replay = config;
       replay.frames_dir.reset();
       replay.faults.max_consecutive_failed_positions = static_cast<int>(

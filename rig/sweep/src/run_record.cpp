@@ -2,7 +2,6 @@
 
 #include <aravis-0.8/arv.h>
 #include <modbus/modbus-version.h>
-#include <sqlite3.h>
 #include <unistd.h>
 #include <zmq.h>
 

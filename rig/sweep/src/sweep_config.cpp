@@ -14,6 +14,7 @@
 
 #include "motion/bench_url.hpp"
 #include "motion/errors.hpp"
+#include "rig/sweep/pose_json.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "sweep_file_section.hpp"
 
@@ -174,13 +175,6 @@ void read_rig(Section& s, const fs::path& base_dir, SweepConfig* c) {
   s.reject_unknown("file, camera_mount, target");
 }
 
-nlohmann::json pose_json(const vision::Pose& T) {
-  nlohmann::json R = nlohmann::json::array();
-  for (int r = 0; r < 3; ++r)
-    R.push_back({T.R(r, 0), T.R(r, 1), T.R(r, 2)});
-  return {{"R", R}, {"t_m", {T.t.x(), T.t.y(), T.t.z()}}};
-}
-
 template <typename T>
 nlohmann::json optional_json(const std::optional<T>& v) {
   return v ? nlohmann::json(*v) : nlohmann::json(nullptr);
@@ -247,8 +241,8 @@ nlohmann::json SweepConfig::to_json() const {
       {"rig",
        {{"file", rig_geometry_path},
         {"toml", rig_geometry_text},
-        {"T_carriage_cam", pose_json(geometry.T_carriage_cam)},
-        {"T_bench_target", pose_json(geometry.T_bench_target)}}},
+        {"T_carriage_cam", pose_to_json(geometry.T_carriage_cam, "t_m")},
+        {"T_bench_target", pose_to_json(geometry.T_bench_target, "t_m")}}},
       {"database", {{"path", database_path}, {"durable_commits", durable_commits}}},
       {"telemetry",
        {{"publish", telemetry_publish},

@@ -1,6 +1,6 @@
-// The telemetry message of a stored position (rig/telemetry.hpp lists the
-// message types): bench XY, true distance, each solver's distance and errors
-// as means over the position's frames, stage times.
+// The telemetry message of a stored position (rig/telemetry/telemetry.hpp
+// lists the message types): bench XY, true distance, each solver's distance
+// and errors as means over the position's frames, stage times.
 #pragma once
 
 #include <cstdint>

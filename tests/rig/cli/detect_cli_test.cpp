@@ -156,8 +156,8 @@ TEST_F(RigDetect, ImageOfAnotherSizeThanTheCameraIsRefused) {
   cv::imwrite(path("dot.png"), cv::Mat(1, 1, CV_8U, cv::Scalar(0)));
   const rig_test::RigRun r = run(path("dot.png"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("image '" + path("dot.png") +
-                       "': is 1x1 px but the camera calibration is for 736x571 px"),
+  EXPECT_NE(r.err.find("the built-in paper camera (no --camera) is for 736x571 px but image '" +
+                       path("dot.png") + "' is 1x1 px"),
             std::string::npos)
       << r.err;
 }

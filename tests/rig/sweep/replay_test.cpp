@@ -356,10 +356,10 @@ TEST_F(RecordedRunFixture, FramesOfAnotherSizeThanTheCalibrationAreRefused) {
     FAIL() << "no error";
   } catch (const rig::sweep::RunMismatch& e) {
     EXPECT_NE(std::string(e.what()).find("capture.calibration: the built-in paper camera "
-                                         "(capture.calibration = \"\") is for 736x571 px but the "
-                                         "frames of run 1 of " +
-                                         store_->path() + " (first: " + *f.image_path +
-                                         ") are 640x480 px"),
+                                         "(capture.calibration = \"\") is for 736x571 px but "
+                                         "frame " +
+                                         *f.image_path + " of run 1 of " + store_->path() +
+                                         " is 640x480 px"),
               std::string::npos)
         << e.what();
   }

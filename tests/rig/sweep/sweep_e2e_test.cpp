@@ -297,8 +297,9 @@ TEST(SweepEndToEnd, ACalibrationForAnotherImageSizeStopsBeforeTheBenchMoves) {
   const motion::XY before = rig.bench().actual_position_mm();
   const rig_test::RigRun run = rig_test::run_rig("sweep " + sweep);
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_NE(run.err.find("vga.yaml is for 640x480 px but camera gige:127.0.0.1 delivers 736x571"),
-            std::string::npos)
+  EXPECT_NE(
+      run.err.find("vga.yaml is for 640x480 px but a frame of camera gige:127.0.0.1 is 736x571 px"),
+      std::string::npos)
       << run.err;
   const motion::XY after = rig.bench().actual_position_mm();
   EXPECT_EQ(before.x_mm, after.x_mm);

@@ -18,6 +18,7 @@
 
 #include <Eigen/Core>
 #include <opencv2/core.hpp>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -73,6 +74,15 @@ class Camera {
   int width_px() const { return width_px_; }
   int height_px() const { return height_px_; }
   bool has_distortion() const;
+
+  // Whether an image of `image_size` pixels is the size this calibration was
+  // made at (width_px() x height_px()): the intrinsics hold at no other size.
+  // Returns nothing when it is; otherwise why not, naming both as the caller
+  // names them: "CALIBRATION is for 736x571 px but IMAGE is 640x480 px"
+  // (e.g. calibration "/abs/cam.yaml", image "image 'frame.png'").
+  std::optional<std::string> image_size_mismatch(const cv::Size& image_size,
+                                                 const std::string& image,
+                                                 const std::string& calibration) const;
 
   // K as a 3x3 matrix (pixels).
   Eigen::Matrix3d K() const;

@@ -29,13 +29,10 @@
 // frames are rejected and taken again (up to capture_retries times).
 #pragma once
 
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <nlohmann/json.hpp>
-#include <stdexcept>
 #include <string>
 
 #include "db/store/store.hpp"

@@ -212,8 +212,8 @@ class ReplayFrames : public vision::FrameSource {
 //     save_frames in the sweep file)" (for a replay run, naming its original);
 //   - capture.frames_per_position <= RecordedRun::saved_frames_per_position();
 //   - the first saved frame that reads and verifies has the calibration's
-//     image size ("capture.calibration: ... is for 640x480 px but run 7's
-//     frames (first: PATH) are 736x571 px ...").
+//     image size ("capture.calibration: ... is for 640x480 px but frame PATH
+//     of run 7 of DB is 736x571 px ...", vision::Camera::image_size_mismatch).
 SweepConfig replay_config(const SweepConfig& config, const RecordedRun& recorded);
 
 }  // namespace rig::sweep
