@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "config/error.hpp"
 #include "rig/sweep/sweep_plan.hpp"
 
 namespace {
@@ -494,6 +495,18 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"negative_dwell", "dwell_ms = 0", "dwell_ms = -1",
                 "settle.dwell_ms = -1: expected an integer in 0..3600000"},
         BadCase{"toml_syntax", "frames_per_position = 3", "frames_per_position = = 3",
-                "line 9: ", true}));
+                "line 9, column 23: ", true}));
+
+TEST(SweepConfigFile, AFolderOrAMissingFileIsRefusedAsTheSweepFile) {
+  const fs::path dir = temp_dir("folder");
+  EXPECT_EQ(load_error(dir.string()),
+            dir.string() + ": is a folder; expected the sweep file, a regular file");
+  EXPECT_EQ(load_error((dir / "none.toml").string()),
+            (dir / "none.toml").string() + ": does not exist; expected the sweep file");
+}
+
+TEST(SweepConfigFile, ItsErrorsAreConfigErrors) {
+  EXPECT_THROW(rig::sweep::load_sweep_config("/nonexistent/sweep.toml"), config::ConfigError);
+}
 
 }  // namespace

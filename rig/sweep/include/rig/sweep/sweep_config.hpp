@@ -70,9 +70,9 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <stdexcept>
 #include <string>
 
+#include "config/error.hpp"
 #include "motion/drive_profile.hpp"
 #include "rig/sweep/sweep_plan.hpp"
 #include "vision/camera.hpp"
@@ -88,9 +88,10 @@ namespace rig::sweep {
 //   "/abs/ci.toml: bench.url: missing; expected a bench URL modbus-tcp://HOST:PORT ..."
 // Errors of the files it names (profile, calibration, layout, rig, CSV plan)
 // are wrapped: the message names the sweep file and key, then quotes the cause.
-class SweepConfigError : public std::runtime_error {
+// A config::ConfigError: bad input.
+class SweepConfigError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 struct SettlePolicy {
