@@ -26,7 +26,6 @@
 
 #include "commands.hpp"
 #include "db/store/store.hpp"
-#include "motion/bench_url.hpp"
 #include "motion/errors.hpp"
 #include "motion/modbus_bench.hpp"
 #include "rig/sweep/controller.hpp"
@@ -100,7 +99,7 @@ class BadInput : public std::runtime_error {
 // size the calibration describes.
 void check_camera(vision::FrameSource& camera, const sweep::SweepConfig& config) {
   camera.trigger();
-  const vision::Frame frame = camera.grab(config.faults.grab_timeout);
+  const vision::Frame frame = camera.grab(config.grab_timeout);
   const vision::Camera& model = config.camera;
   if (frame.image.cols != model.width_px() || frame.image.rows != model.height_px()) {
     throw BadInput(config.sweep_file +
@@ -291,18 +290,13 @@ int run_sweep(const SweepArgs& args) {
                    "continues a run on the bench; expected one of them");
   sweep::SweepConfig config = sweep::load_sweep_config(args.sweep_file);
   const std::string database = args.database.empty() ? config.database_path : args.database;
-  telemetry::TelemetryEndpoints endpoints;
-  endpoints.publish = config.telemetry_publish;
-  endpoints.control = config.telemetry_control;
-  endpoints.allow_remote = config.telemetry_allow_remote;
-  validate_endpoints(endpoints);
-  LiveLink link(endpoints);
+  LiveLink link(config.telemetry);  // validated with the sweep file
   if (args.replay_run > 0) return run_replay(args, config, database, link);
 
   // The camera first: a wrong calibration must stop the sweep before the bench moves.
   std::unique_ptr<vision::FrameSource> camera = open_camera(config);
 
-  motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
+  motion::ModbusBench bench(config.bench_url, config.bench_profile);
   if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
 
   if (const auto parent = std::filesystem::path(database).parent_path(); !parent.empty())

@@ -215,12 +215,12 @@ struct Controller::Impl {
     for (int k = 0; k < config.frames_per_position; ++k) {
       for (int discarded = 0;; ++discarded) {
         camera.trigger();
-        vision::Frame frame = camera.grab(config.faults.grab_timeout);
+        vision::Frame frame = camera.grab(config.grab_timeout);
         if (frame.host_time >= settled_at) {
           frames.push_back(std::move(frame));
           break;
         }
-        if (discarded >= config.faults.capture_retries)
+        if (discarded >= config.capture.retries)
           throw PositionFailure{"camera", "only frames exposed before the bench settled arrived"};
       }
     }
@@ -285,7 +285,7 @@ struct Controller::Impl {
         } catch (const motion::BenchError& e) {
           unverified = std::string("the read-back after the exposures failed: ") + e.what();
         }
-        if (attempt >= config.faults.capture_retries) throw PositionFailure{"settle", unverified};
+        if (attempt >= config.capture.retries) throw PositionFailure{"settle", unverified};
         store.record_event(run_id, "settle", unverified + "; frames taken again", index);
         rec.stage_times.clear();
       }

@@ -116,9 +116,9 @@ SweepPlan read_plan(Table s, const motion::SoftLimits& limits) {
 
 // The bench first: the plan, speed and settle timeout are checked against its profile.
 void read_bench(Table bench, SweepConfig* c) {
-  c->bench_url = bench.string("url", kBenchForms);
-  load_named(bench, "url", "a valid bench URL",
-             [&] { return motion::BenchUrl::parse(c->bench_url); });
+  const std::string url = bench.string("url", kBenchForms);
+  c->bench_url =
+      load_named(bench, "url", "a valid bench URL", [&] { return motion::BenchUrl::parse(url); });
   c->bench_profile_path = bench.existing_file("profile", "a drive profile");
   c->bench_profile = load_named(bench, "profile", "a drive profile (motion/drive_profile)",
                                 [&] { return motion::load_drive_profile(c->bench_profile_path); });
@@ -170,10 +170,9 @@ void read_capture(Table capture, SweepConfig* c) {
       "exposure_us", {"an exposure time > 0 µs", [](double v) { return v > 0; }});
   c->capture.gain = capture.optional_number(
       "gain", {"a gain >= 0 (camera units, usually dB)", [](double v) { return v >= 0; }});
-  c->faults.grab_timeout =
-      std::chrono::milliseconds(capture.integer_or("grab_timeout_ms", 2000, 1, 3600000));
-  c->faults.capture_retries = static_cast<int>(capture.integer_or("retries", 2, 0, 100));
-  c->capture.retries = c->faults.capture_retries;
+  c->grab_timeout = std::chrono::milliseconds(
+      capture.integer_or("grab_timeout_ms", c->grab_timeout.count(), 1, 3600000));
+  c->capture.retries = static_cast<int>(capture.integer_or("retries", 2, 0, 100));
   const std::string save = capture.string_or("save_frames", "", "a folder path, or \"\"");
   if (!save.empty()) {
     c->frames_dir = capture.resolve(save);
@@ -258,18 +257,20 @@ void check_endpoint(const Table& t, const std::string& key, const std::string& e
   }
 }
 
-void read_telemetry(Table telemetry, SweepConfig* c) {
+// The endpoints, checked here (each error naming its key) by the rules
+// telemetry::validate_endpoints applies.
+void read_telemetry(Table t, SweepConfig* c) {
   const std::string endpoint = "a ZeroMQ endpoint tcp://HOST:PORT";
-  c->telemetry_publish = telemetry.string_or("publish", c->telemetry_publish, endpoint);
-  c->telemetry_control = telemetry.string_or("control", c->telemetry_control, endpoint);
-  c->telemetry_allow_remote = telemetry.boolean_or("allow_remote", false);
-  check_endpoint(telemetry, "publish", c->telemetry_publish, c->telemetry_allow_remote);
-  check_endpoint(telemetry, "control", c->telemetry_control, c->telemetry_allow_remote);
-  if (c->telemetry_publish == c->telemetry_control) {
-    telemetry.fail("control",
-                   "an endpoint different from telemetry.publish (" + c->telemetry_publish + ")");
+  telemetry::TelemetryEndpoints& e = c->telemetry;
+  e.publish = t.string_or("publish", e.publish, endpoint);
+  e.control = t.string_or("control", e.control, endpoint);
+  e.allow_remote = t.boolean_or("allow_remote", e.allow_remote);
+  check_endpoint(t, "publish", e.publish, e.allow_remote);
+  check_endpoint(t, "control", e.control, e.allow_remote);
+  if (e.publish == e.control) {
+    t.fail("control", "an endpoint different from telemetry.publish (" + e.publish + ")");
   }
-  telemetry.reject_unknown();
+  t.reject_unknown();
 }
 
 // The target in front of the camera (z_cam > 0) at every plan position.
@@ -349,8 +350,8 @@ nlohmann::json SweepConfig::to_json() const {
         {"pixel_format", capture.pixel_format},
         {"exposure_us", optional_json(capture.exposure_us)},
         {"gain", optional_json(capture.gain)},
-        {"grab_timeout_ms", faults.grab_timeout.count()},
-        {"retries", faults.capture_retries},
+        {"grab_timeout_ms", grab_timeout.count()},
+        {"retries", capture.retries},
         {"save_frames", optional_json(frames_dir)}}},
       {"camera",
        {{"width_px", camera.width_px()},
@@ -365,7 +366,7 @@ nlohmann::json SweepConfig::to_json() const {
         {"p2", d.p2},
         {"k3", d.k3}}},
       {"bench",
-       {{"url", bench_url},
+       {{"url", bench_url.str()},
         {"profile", bench_profile_path},
         {"profile_name", bench_profile.name},
         {"speed_mm_s", speed_mm_s.value_or(bench_profile.default_speed_mm_s)},
@@ -391,9 +392,9 @@ nlohmann::json SweepConfig::to_json() const {
         {"T_bench_target", pose_json(geometry.T_bench_target)}}},
       {"database", {{"path", database_path}, {"durable_commits", durable_commits}}},
       {"telemetry",
-       {{"publish", telemetry_publish},
-        {"control", telemetry_control},
-        {"allow_remote", telemetry_allow_remote}}},
+       {{"publish", telemetry.publish},
+        {"control", telemetry.control},
+        {"allow_remote", telemetry.allow_remote}}},
   };
 }
 
