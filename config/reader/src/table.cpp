@@ -51,10 +51,6 @@ std::string Table::field(const std::string& key) const {
   return name_.empty() ? key : name_ + "." + key;
 }
 
-const std::string& Table::source() const {
-  return parsed_->source;
-}
-
 bool Table::has(const std::string& key) const {
   return node(key) != nullptr;
 }
@@ -67,10 +63,6 @@ const detail::Node* Table::node(const std::string& key) const {
 const detail::Node* Table::take(const std::string& key) {
   if (std::find(asked_.begin(), asked_.end(), key) == asked_.end()) asked_.push_back(key);
   return node(key);
-}
-
-void Table::raise(const std::string& message) const {
-  detail::raise_with(parsed_->raise, parsed_->source + ": " + message);
 }
 
 void Table::fail(const std::string& key, const std::string& expected,

@@ -11,7 +11,8 @@
 //    A TOML syntax error names the file, the line and the column:
 //      FILE: line L, column C: DESCRIPTION; expected valid TOML
 //  - A key no getter asked for is an error (Table::reject_unknown): a misspelt
-//    key never falls back to a default.
+//    key never falls back to a default. A key that another reader reads is
+//    accepted by name (Table::ignore).
 //  - Integers are integers: 3.0 is not accepted where an integer is expected;
 //    numbers accept integers and floats, and never inf or nan.
 //  - A table keyed by codes (a drive profile's [alarms]) accepts each code in
@@ -53,10 +54,11 @@ inline constexpr std::uintmax_t kMaxFileBytes = std::uintmax_t{1} << 20;
 std::string read_text_file(const std::string& path, const std::string& what, Raise raise);
 
 // The common message form: "FILE: FIELD = VALUE: [PROBLEM; ]expected EXPECTED",
-// or, without a value, "FILE: FIELD: missing; [PROBLEM; ]expected EXPECTED"
-// (with a problem and no value, the problem replaces "missing"). For checks
-// made after reading (a profile's overlapping registers, a target's markers
-// off the sheet), where the value is the one in memory.
+// or, without a value, "FILE: FIELD: missing; expected EXPECTED" where a
+// problem, if given, takes the place of "missing" (an absent key whose
+// default does not fit). For checks made after reading (a profile's
+// overlapping registers, a target's markers off the sheet), where the value
+// is the one in memory.
 std::string error_message(const std::string& file, const std::string& field,
                           const std::optional<std::string>& value, const std::string& expected,
                           const std::string& problem = "");
@@ -120,9 +122,6 @@ class Table {
   // Dotted name in the file: "" for the root, "capture", "sim.faults",
   // "markers[2]".
   const std::string& name() const { return name_; }
-  // The dotted name of a key of this table ("capture.frames_per_position").
-  std::string field(const std::string& key) const;
-  const std::string& source() const;  // the file's path
   // False for an absent optional_table(): its getters then give their
   // defaults and its required getters report the key missing.
   bool exists() const { return table_ != nullptr; }
@@ -190,9 +189,6 @@ class Table {
   // place of "missing" if given) when the key is absent.
   [[noreturn]] void fail(const std::string& key, const std::string& expected,
                          const std::string& problem = "") const;
-  // Raises "FILE: MESSAGE" through the Document's Raise.
-  [[noreturn]] void raise(const std::string& message) const;
-
   // This table as a TOML document (its sub-tables become [headers]): what a
   // run stores when a rig is given inline in a sweep file.
   std::string to_toml() const;
@@ -201,6 +197,8 @@ class Table {
   friend class Document;
   Table(std::shared_ptr<const detail::Parsed> parsed, const detail::Node* table, std::string name)
       : parsed_(std::move(parsed)), table_(table), name_(std::move(name)) {}
+  // The dotted name of a key of this table ("capture.frames_per_position").
+  std::string field(const std::string& key) const;
   const detail::Node* node(const std::string& key) const;  // the key's value, or nullptr
   const detail::Node* take(const std::string& key);        // node(key), marking it asked
   std::int64_t checked_integer(const std::string& key, const detail::Node& node, std::int64_t min,

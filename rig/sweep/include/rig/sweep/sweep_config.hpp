@@ -182,8 +182,9 @@ struct SweepConfig {
   nlohmann::json to_json() const;
 };
 
-// Reads, resolves and validates a sweep file (format above). Throws
-// SweepConfigError naming the file, the key, the value and what was expected.
+// Reads, resolves and validates a sweep file (format above; a regular file of
+// at most 1 MiB, config/reader.hpp). Throws SweepConfigError naming the file,
+// the key, the value and what was expected.
 SweepConfig load_sweep_config(const std::string& path);
 
 }  // namespace rig::sweep
