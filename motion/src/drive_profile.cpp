@@ -1,23 +1,26 @@
 // Reading and validating drive profiles (see drive_profile.hpp).
 #include "motion/drive_profile.hpp"
 
-#include <toml++/toml.h>
-
 #include <cmath>
 #include <limits>
-#include <set>
 #include <utility>
 #include <vector>
 
+#include "config/reader.hpp"
 #include "motion/errors.hpp"
-#include "motion/toml_reader.hpp"
 
 namespace motion {
 namespace {
 
-using TableReader = TomlTableReader;
+using config::format_number;
 
 constexpr std::int64_t kMaxAddress = 65535;
+
+// "SOURCE: FIELD = VALUE: [PROBLEM; ]expected EXPECTED" for a value in memory.
+[[noreturn]] void fail(const DriveProfile& p, const std::string& field, const std::string& value,
+                       const std::string& expected, const std::string& problem = "") {
+  throw ProfileError(config::error_message(p.source, field, value, expected, problem));
+}
 
 // Registers occupied by one field: [first, first + count).
 struct Span {
@@ -26,12 +29,15 @@ struct Span {
   int count;
 };
 
-void check_no_overlap(const DriveProfile& p, std::vector<Span> spans) {
+std::string range(int first, int count) {
+  return std::to_string(first) + ".." + std::to_string(first + count - 1);
+}
+
+void check_no_overlap(const DriveProfile& p, const std::vector<Span>& spans) {
   for (const Span& s : spans) {
     if (s.first < 0 || s.first + s.count - 1 > kMaxAddress) {
-      throw ProfileError(p.source + ": " + s.field + ": address " + std::to_string(s.first) +
-                         " does not fit in 0..65535 with its " + std::to_string(s.count) +
-                         " register(s)");
+      fail(p, s.field, std::to_string(s.first),
+           "an address whose " + std::to_string(s.count) + " register(s) fit in 0..65535");
     }
   }
   for (size_t i = 0; i < spans.size(); ++i) {
@@ -39,12 +45,150 @@ void check_no_overlap(const DriveProfile& p, std::vector<Span> spans) {
       const Span& a = spans[i];
       const Span& b = spans[j];
       if (a.first < b.first + b.count && b.first < a.first + a.count) {
-        throw ProfileError(p.source + ": " + b.field + ": registers " + std::to_string(b.first) +
-                           ".." + std::to_string(b.first + b.count - 1) + " overlap " + a.field +
-                           " (" + std::to_string(a.first) + ".." +
-                           std::to_string(a.first + a.count - 1) + ")");
+        fail(p, b.field, std::to_string(b.first),
+             "registers that no other field of the same table uses",
+             "registers " + range(b.first, b.count) + " overlap " + a.field + " (" +
+                 range(a.first, a.count) + ")");
       }
     }
+  }
+}
+
+void check_link_and_units(const DriveProfile& p) {
+  if (!(p.unit_id >= 1 && p.unit_id <= 247) && p.unit_id != 255) {
+    fail(p, "link.unit_id", std::to_string(p.unit_id), "a unit id 1..247, or 255");
+  }
+  if (!(p.counts_per_mm > 0) || !std::isfinite(p.counts_per_mm)) {
+    fail(p, "units.counts_per_mm", format_number(p.counts_per_mm), "a finite number > 0");
+  }
+  if (!(p.speed_units_per_mm_s > 0) || !std::isfinite(p.speed_units_per_mm_s)) {
+    fail(p, "units.speed_units_per_mm_s", format_number(p.speed_units_per_mm_s),
+         "a finite number > 0");
+  }
+}
+
+// Writes and feedback in their tables: each field's registers fit, and no two
+// fields of one table share a register.
+void check_registers(const DriveProfile& p) {
+  const RegisterMap& r = p.registers;
+  std::vector<Span> holding = {{"registers.target_x", r.target_x, 2},
+                               {"registers.target_y", r.target_y, 2},
+                               {"registers.speed", r.speed, 1},
+                               {"registers.command", r.command, 1}};
+  std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, 2},
+                                {"registers.actual_y", r.actual_y, 2},
+                                {"registers.status", r.status, 1},
+                                {"registers.alarm", r.alarm, 1}};
+  if (r.feedback == RegisterTable::kHolding) {
+    holding.insert(holding.end(), feedback.begin(), feedback.end());
+    check_no_overlap(p, holding);
+  } else {
+    check_no_overlap(p, holding);
+    check_no_overlap(p, feedback);
+  }
+}
+
+void check_status_bits(const DriveProfile& p) {
+  const StatusBits& b = p.status_bits;
+  const std::vector<std::pair<std::string, int>> bits = {
+      {"status_bits.homed", b.homed},
+      {"status_bits.moving", b.moving},
+      {"status_bits.in_position", b.in_position},
+      {"status_bits.alarm", b.alarm},
+      {"status_bits.emergency_stop", b.emergency_stop}};
+  for (size_t i = 0; i < bits.size(); ++i) {
+    const auto& [field, bit] = bits[i];
+    if (bit < 0 || bit > 15) fail(p, field, std::to_string(bit), "a bit of a register (0..15)");
+    for (size_t j = 0; j < i; ++j) {
+      if (bit == bits[j].second) {
+        fail(p, field, std::to_string(bit), "a bit that no other status uses",
+             "bit " + std::to_string(bit) + " is also " + bits[j].first);
+      }
+    }
+  }
+}
+
+void check_command_codes(const DriveProfile& p) {
+  const CommandCodes& c = p.commands;
+  const std::vector<std::pair<std::string, int>> codes = {
+      {"commands.move_absolute", c.move_absolute},
+      {"commands.home", c.home},
+      {"commands.stop", c.stop},
+      {"commands.reset_alarm", c.reset_alarm}};
+  for (size_t i = 0; i < codes.size(); ++i) {
+    const auto& [field, code] = codes[i];
+    for (size_t j = 0; j < i; ++j) {
+      if (code == codes[j].second) {
+        fail(p, field, std::to_string(code), "a code that no other command uses",
+             "code " + std::to_string(code) + " is also " + codes[j].first);
+      }
+    }
+  }
+}
+
+// Speeds that the speed register holds, and a tolerance the encoder can meet.
+void check_speeds_and_tolerance(const DriveProfile& p) {
+  if (!(p.max_speed_mm_s > 0)) {
+    fail(p, "motion.max_speed_mm_s", format_number(p.max_speed_mm_s), "a speed > 0 mm/s");
+  }
+  if (!(p.default_speed_mm_s > 0) || p.default_speed_mm_s > p.max_speed_mm_s) {
+    fail(p, "motion.default_speed_mm_s", format_number(p.default_speed_mm_s),
+         "a speed in (0, max_speed_mm_s = " + format_number(p.max_speed_mm_s) + "] mm/s");
+  }
+  if (std::lround(p.max_speed_mm_s * p.speed_units_per_mm_s) > 65535) {
+    fail(p, "motion.max_speed_mm_s", format_number(p.max_speed_mm_s),
+         "a speed of at most 65535 speed units (" + format_number(65535 / p.speed_units_per_mm_s) +
+             " mm/s)",
+         "it does not fit in one 16-bit speed register");
+  }
+  if (!(p.position_tolerance_mm * p.counts_per_mm >= 1.0)) {
+    fail(p, "motion.position_tolerance_mm", format_number(p.position_tolerance_mm),
+         "a tolerance of at least one count (" + format_number(1.0 / p.counts_per_mm) + " mm)",
+         "finer than one count, the bench could never settle");
+  }
+}
+
+// Soft limits that fit the position registers, are not empty and hold home.
+void check_soft_limits(const DriveProfile& p) {
+  const SoftLimits& s = p.soft_limits;
+  for (auto [name, v] : {std::pair<const char*, double>{"soft_limits.x_min_mm", s.x_min_mm},
+                         {"soft_limits.x_max_mm", s.x_max_mm},
+                         {"soft_limits.y_min_mm", s.y_min_mm},
+                         {"soft_limits.y_max_mm", s.y_max_mm}}) {
+    const double counts = v * p.counts_per_mm;
+    if (!std::isfinite(v) || std::fabs(counts) > std::numeric_limits<std::int32_t>::max() - 1.0) {
+      fail(p, name, format_number(v), "a limit that fits in a signed 32-bit position register");
+    }
+  }
+  if (!(s.x_min_mm < s.x_max_mm)) {
+    fail(p, "soft_limits.x_max_mm", format_number(s.x_max_mm),
+         "a limit > soft_limits.x_min_mm (" + format_number(s.x_min_mm) + ")");
+  }
+  if (!(s.y_min_mm < s.y_max_mm)) {
+    fail(p, "soft_limits.y_max_mm", format_number(s.y_max_mm),
+         "a limit > soft_limits.y_min_mm (" + format_number(s.y_min_mm) + ")");
+  }
+  if (!s.contains(p.home_x_mm, p.home_y_mm)) {
+    const std::string field = s.contains(p.home_x_mm, s.y_min_mm) ? "y" : "x";
+    fail(p, "motion.home_" + field + "_mm", format_number(field == "x" ? p.home_x_mm : p.home_y_mm),
+         "a home inside the soft limits x " + format_number(s.x_min_mm) + ".." +
+             format_number(s.x_max_mm) + " mm, y " + format_number(s.y_min_mm) + ".." +
+             format_number(s.y_max_mm) + " mm");
+  }
+}
+
+void check_timing(const DriveProfile& p) {
+  const Timing& t = p.timing;
+  for (auto [name, v] :
+       {std::pair<const char*, int>{"link.response_timeout_ms", t.response_timeout_ms},
+        {"link.reconnect_timeout_ms", t.reconnect_timeout_ms},
+        {"motion.poll_interval_ms", t.poll_interval_ms},
+        {"motion.settle_timeout_ms", t.settle_timeout_ms},
+        {"motion.home_timeout_ms", t.home_timeout_ms}}) {
+    if (v <= 0) fail(p, name, std::to_string(v), "a time > 0 ms");
+  }
+  if (t.settle_time_ms < 0) {
+    fail(p, "motion.settle_time_ms", std::to_string(t.settle_time_ms), "a time >= 0 ms");
   }
 }
 
@@ -74,229 +218,127 @@ std::int32_t decode_int32(const std::uint16_t in[2], WordOrder order) {
 }
 
 void validate(const DriveProfile& p) {
-  auto fail = [&](const std::string& field, const std::string& what) {
-    throw ProfileError(p.source + ": " + field + ": " + what);
-  };
-  if (!(p.unit_id >= 1 && p.unit_id <= 247) && p.unit_id != 255) {
-    fail("link.unit_id", std::to_string(p.unit_id) + " is not a unit id (1..247, or 255)");
-  }
-  if (!(p.counts_per_mm > 0) || !std::isfinite(p.counts_per_mm)) {
-    fail("units.counts_per_mm", "must be a finite number > 0");
-  }
-  if (!(p.speed_units_per_mm_s > 0)) fail("units.speed_units_per_mm_s", "must be > 0");
-
-  const RegisterMap& r = p.registers;
-  std::vector<Span> holding = {{"registers.target_x", r.target_x, 2},
-                               {"registers.target_y", r.target_y, 2},
-                               {"registers.speed", r.speed, 1},
-                               {"registers.command", r.command, 1}};
-  std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, 2},
-                                {"registers.actual_y", r.actual_y, 2},
-                                {"registers.status", r.status, 1},
-                                {"registers.alarm", r.alarm, 1}};
-  if (r.feedback == RegisterTable::kHolding) {
-    holding.insert(holding.end(), feedback.begin(), feedback.end());
-    check_no_overlap(p, holding);
-  } else {
-    check_no_overlap(p, holding);
-    check_no_overlap(p, feedback);
-  }
-
-  const StatusBits& b = p.status_bits;
-  std::vector<std::pair<std::string, int>> bits = {
-      {"status_bits.homed", b.homed},
-      {"status_bits.moving", b.moving},
-      {"status_bits.in_position", b.in_position},
-      {"status_bits.alarm", b.alarm},
-      {"status_bits.emergency_stop", b.emergency_stop}};
-  for (size_t i = 0; i < bits.size(); ++i) {
-    if (bits[i].second < 0 || bits[i].second > 15) {
-      fail(bits[i].first, std::to_string(bits[i].second) + " is not a bit of a register (0..15)");
-    }
-    for (size_t j = 0; j < i; ++j) {
-      if (bits[i].second == bits[j].second) {
-        fail(bits[i].first, "bit " + std::to_string(bits[i].second) + " is also " + bits[j].first);
-      }
-    }
-  }
-
-  const CommandCodes& c = p.commands;
-  std::vector<std::pair<std::string, int>> codes = {{"commands.move_absolute", c.move_absolute},
-                                                    {"commands.home", c.home},
-                                                    {"commands.stop", c.stop},
-                                                    {"commands.reset_alarm", c.reset_alarm}};
-  for (size_t i = 0; i < codes.size(); ++i) {
-    for (size_t j = 0; j < i; ++j) {
-      if (codes[i].second == codes[j].second) {
-        fail(codes[i].first,
-             "code " + std::to_string(codes[i].second) + " is also " + codes[j].first);
-      }
-    }
-  }
-
-  if (!(p.max_speed_mm_s > 0)) fail("motion.max_speed_mm_s", "must be > 0");
-  if (!(p.default_speed_mm_s > 0) || p.default_speed_mm_s > p.max_speed_mm_s) {
-    fail("motion.default_speed_mm_s",
-         std::to_string(p.default_speed_mm_s) +
-             " must be in (0, max_speed_mm_s = " + std::to_string(p.max_speed_mm_s) + "]");
-  }
-  if (std::lround(p.max_speed_mm_s * p.speed_units_per_mm_s) > 65535) {
-    fail("motion.max_speed_mm_s", "does not fit in one 16-bit speed register");
-  }
-  if (!(p.position_tolerance_mm * p.counts_per_mm >= 1.0)) {
-    fail("motion.position_tolerance_mm",
-         std::to_string(p.position_tolerance_mm) + " mm is finer than one count (" +
-             std::to_string(1.0 / p.counts_per_mm) + " mm): the bench could never settle");
-  }
-
-  const SoftLimits& s = p.soft_limits;
-  for (auto [name, v] : {std::pair<const char*, double>{"soft_limits.x_min_mm", s.x_min_mm},
-                         {"soft_limits.x_max_mm", s.x_max_mm},
-                         {"soft_limits.y_min_mm", s.y_min_mm},
-                         {"soft_limits.y_max_mm", s.y_max_mm}}) {
-    const double counts = v * p.counts_per_mm;
-    if (!std::isfinite(v) || std::fabs(counts) > std::numeric_limits<std::int32_t>::max() - 1.0) {
-      fail(name, std::to_string(v) + " mm does not fit in a signed 32-bit position register");
-    }
-  }
-  if (!(s.x_min_mm < s.x_max_mm)) fail("soft_limits.x_max_mm", "must be > x_min_mm");
-  if (!(s.y_min_mm < s.y_max_mm)) fail("soft_limits.y_max_mm", "must be > y_min_mm");
-  if (!s.contains(p.home_x_mm, p.home_y_mm)) {
-    fail("motion.home_x_mm", "home (" + std::to_string(p.home_x_mm) + ", " +
-                                 std::to_string(p.home_y_mm) + ") mm lies outside the soft limits");
-  }
-
-  const Timing& t = p.timing;
-  for (auto [name, v] :
-       {std::pair<const char*, int>{"link.response_timeout_ms", t.response_timeout_ms},
-        {"link.reconnect_timeout_ms", t.reconnect_timeout_ms},
-        {"motion.poll_interval_ms", t.poll_interval_ms},
-        {"motion.settle_timeout_ms", t.settle_timeout_ms},
-        {"motion.home_timeout_ms", t.home_timeout_ms}}) {
-    if (v <= 0) fail(name, std::to_string(v) + " must be > 0");
-  }
-  if (t.settle_time_ms < 0) fail("motion.settle_time_ms", "must be >= 0");
+  check_link_and_units(p);
+  check_registers(p);
+  check_status_bits(p);
+  check_command_codes(p);
+  check_speeds_and_tolerance(p);
+  check_soft_limits(p);
+  check_timing(p);
 }
 
-DriveProfile parse_drive_profile(std::string_view text, const std::string& source) {
-  const toml::table root = parse_toml(text, source);
+namespace {
 
-  DriveProfile p;
-  p.source = source;
-
-  TableReader top(root, source, "");
-  p.name = top.string("name");
-
-  TableReader link(root, source, "link");
-  p.unit_id = static_cast<int>(link.integer("unit_id", 0, 255));
-  const std::string order = link.string("word_order");
-  if (order == "high_first") {
-    p.word_order = WordOrder::kHighFirst;
-  } else if (order == "low_first") {
-    p.word_order = WordOrder::kLowFirst;
-  } else {
-    link.fail("word_order", "\"" + order + "\" is not \"high_first\" or \"low_first\"");
-  }
-  p.timing.response_timeout_ms = static_cast<int>(link.integer("response_timeout_ms", 1, 60000));
-  p.timing.reconnect_timeout_ms =
+void read_link(config::Table link, DriveProfile* p) {
+  p->unit_id = static_cast<int>(link.integer("unit_id", 0, 255));
+  p->word_order = link.choice("word_order", {"high_first", "low_first"}) == "high_first"
+                      ? WordOrder::kHighFirst
+                      : WordOrder::kLowFirst;
+  p->timing.response_timeout_ms = static_cast<int>(link.integer("response_timeout_ms", 1, 60000));
+  p->timing.reconnect_timeout_ms =
       static_cast<int>(link.integer("reconnect_timeout_ms", 1, 3600000));
   link.reject_unknown();
+}
 
-  TableReader units(root, source, "units");
-  p.counts_per_mm = units.positive("counts_per_mm");
-  p.speed_units_per_mm_s = units.positive("speed_units_per_mm_s");
+void read_units(config::Table units, DriveProfile* p) {
+  p->counts_per_mm = units.number("counts_per_mm", config::positive());
+  p->speed_units_per_mm_s = units.number("speed_units_per_mm_s", config::positive());
   units.reject_unknown();
+}
 
-  TableReader regs(root, source, "registers");
+void read_registers(config::Table regs, RegisterMap* r) {
   auto addr = [&](const char* key) { return static_cast<int>(regs.integer(key, 0, kMaxAddress)); };
-  p.registers.target_x = addr("target_x");
-  p.registers.target_y = addr("target_y");
-  p.registers.speed = addr("speed");
-  p.registers.command = addr("command");
-  const std::string table = regs.string("feedback");
-  if (table == "input") {
-    p.registers.feedback = RegisterTable::kInput;
-  } else if (table == "holding") {
-    p.registers.feedback = RegisterTable::kHolding;
-  } else {
-    regs.fail("feedback", "\"" + table + "\" is not \"input\" or \"holding\"");
-  }
-  p.registers.actual_x = addr("actual_x");
-  p.registers.actual_y = addr("actual_y");
-  p.registers.status = addr("status");
-  p.registers.alarm = addr("alarm");
+  r->target_x = addr("target_x");
+  r->target_y = addr("target_y");
+  r->speed = addr("speed");
+  r->command = addr("command");
+  r->feedback = regs.choice("feedback", {"input", "holding"}) == "input" ? RegisterTable::kInput
+                                                                         : RegisterTable::kHolding;
+  r->actual_x = addr("actual_x");
+  r->actual_y = addr("actual_y");
+  r->status = addr("status");
+  r->alarm = addr("alarm");
   regs.reject_unknown();
+}
 
-  TableReader bits(root, source, "status_bits");
+void read_status_bits(config::Table bits, StatusBits* b) {
   auto bit = [&](const char* key) { return static_cast<int>(bits.integer(key, 0, 15)); };
-  p.status_bits.homed = bit("homed");
-  p.status_bits.moving = bit("moving");
-  p.status_bits.in_position = bit("in_position");
-  p.status_bits.alarm = bit("alarm");
-  p.status_bits.emergency_stop = bit("emergency_stop");
+  b->homed = bit("homed");
+  b->moving = bit("moving");
+  b->in_position = bit("in_position");
+  b->alarm = bit("alarm");
+  b->emergency_stop = bit("emergency_stop");
   bits.reject_unknown();
+}
 
-  TableReader cmds(root, source, "commands");
+void read_commands(config::Table cmds, CommandCodes* c) {
   auto code = [&](const char* key) {
     return static_cast<std::uint16_t>(cmds.integer(key, 0, 65535));
   };
-  p.commands.move_absolute = code("move_absolute");
-  p.commands.home = code("home");
-  p.commands.stop = code("stop");
-  p.commands.reset_alarm = code("reset_alarm");
+  c->move_absolute = code("move_absolute");
+  c->home = code("home");
+  c->stop = code("stop");
+  c->reset_alarm = code("reset_alarm");
   cmds.reject_unknown();
+}
 
-  TableReader mot(root, source, "motion");
-  p.default_speed_mm_s = mot.positive("default_speed_mm_s");
-  p.max_speed_mm_s = mot.positive("max_speed_mm_s");
-  p.position_tolerance_mm = mot.positive("position_tolerance_mm");
-  p.home_x_mm = mot.number("home_x_mm");
-  p.home_y_mm = mot.number("home_y_mm");
-  p.timing.poll_interval_ms = static_cast<int>(mot.integer("poll_interval_ms", 1, 10000));
-  p.timing.settle_time_ms = static_cast<int>(mot.integer("settle_time_ms", 0, 600000));
-  p.timing.settle_timeout_ms = static_cast<int>(mot.integer("settle_timeout_ms", 1, 3600000));
-  p.timing.home_timeout_ms = static_cast<int>(mot.integer("home_timeout_ms", 1, 3600000));
+void read_motion(config::Table mot, DriveProfile* p) {
+  p->default_speed_mm_s = mot.number("default_speed_mm_s", config::positive());
+  p->max_speed_mm_s = mot.number("max_speed_mm_s", config::positive());
+  p->position_tolerance_mm = mot.number("position_tolerance_mm", config::positive());
+  p->home_x_mm = mot.number("home_x_mm");
+  p->home_y_mm = mot.number("home_y_mm");
+  p->timing.poll_interval_ms = static_cast<int>(mot.integer("poll_interval_ms", 1, 10000));
+  p->timing.settle_time_ms = static_cast<int>(mot.integer("settle_time_ms", 0, 600000));
+  p->timing.settle_timeout_ms = static_cast<int>(mot.integer("settle_timeout_ms", 1, 3600000));
+  p->timing.home_timeout_ms = static_cast<int>(mot.integer("home_timeout_ms", 1, 3600000));
   mot.reject_unknown();
+}
 
-  TableReader lim(root, source, "soft_limits");
-  p.soft_limits.x_min_mm = lim.number("x_min_mm");
-  p.soft_limits.x_max_mm = lim.number("x_max_mm");
-  p.soft_limits.y_min_mm = lim.number("y_min_mm");
-  p.soft_limits.y_max_mm = lim.number("y_max_mm");
+void read_soft_limits(config::Table lim, SoftLimits* s) {
+  s->x_min_mm = lim.number("x_min_mm");
+  s->x_max_mm = lim.number("x_max_mm");
+  s->y_min_mm = lim.number("y_min_mm");
+  s->y_max_mm = lim.number("y_max_mm");
   lim.reject_unknown();
+}
 
-  if (const toml::node* alarms = root.get("alarms")) {
-    const toml::table* t = alarms->as_table();
-    if (!t) throw ProfileError(source + ": alarms: expected a table of code = \"meaning\"");
-    for (const auto& [key, value] : *t) {
-      const std::string k(key.str());
-      char* end = nullptr;
-      const long code_value = std::strtol(k.c_str(), &end, 10);
-      if (k.empty() || *end != '\0' || code_value < 1 || code_value > 65535) {
-        throw ProfileError(source + ": alarms." + k + ": key must be an alarm code 1..65535");
-      }
-      auto meaning = value.value<std::string>();
-      if (!meaning) throw ProfileError(source + ": alarms." + k + ": expected a string");
-      p.alarm_meanings[static_cast<int>(code_value)] = *meaning;
-    }
+// [alarms]: code = "meaning", codes in decimal or hex as drive manuals write them.
+void read_alarms(config::Table alarms, std::map<int, std::string>* meanings) {
+  for (const auto& [code, meaning] :
+       alarms.strings_by_code(1, 65535, "an alarm code", "the alarm's meaning, a string")) {
+    (*meanings)[static_cast<int>(code)] = meaning;
   }
+}
 
-  // Top-level keys: the profile's tables, and [sim] (read by the simulated bench).
-  static const std::set<std::string> kTables = {"name",        "link",     "units",  "registers",
-                                                "status_bits", "commands", "motion", "soft_limits",
-                                                "alarms",      "sim"};
-  for (const auto& [key, value] : root) {
-    if (!kTables.count(std::string(key.str()))) {
-      throw ProfileError(source + ": " + std::string(key.str()) + ": unknown key (misspelt?)");
-    }
-  }
-
+DriveProfile read_profile(const config::Document& file) {
+  config::Table root = file.root();
+  DriveProfile p;
+  p.source = file.source();
+  p.name = root.string("name", "the profile's name, a string");
+  read_link(root.table("link"), &p);
+  read_units(root.table("units"), &p);
+  read_registers(root.table("registers"), &p.registers);
+  read_status_bits(root.table("status_bits"), &p.status_bits);
+  read_commands(root.table("commands"), &p.commands);
+  read_motion(root.table("motion"), &p);
+  read_soft_limits(root.table("soft_limits"), &p.soft_limits);
+  read_alarms(root.optional_table("alarms"), &p.alarm_meanings);
+  root.ignore("sim");  // the simulated bench's own table (sim/bench/config.hpp)
+  root.reject_unknown();
   validate(p);
   return p;
 }
 
+}  // namespace
+
+DriveProfile parse_drive_profile(std::string_view text, const std::string& source) {
+  return read_profile(
+      config::Document::parse<ProfileError>(std::string(text), source, "the drive profile"));
+}
+
 DriveProfile load_drive_profile(const std::string& path) {
-  return parse_drive_profile(read_text_file(path, "the drive profile"), path);
+  return read_profile(config::Document::read<ProfileError>(path, "the drive profile"));
 }
 
 }  // namespace motion

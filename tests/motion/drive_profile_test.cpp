@@ -9,6 +9,7 @@
 #include <sstream>
 #include <string>
 
+#include "config/error.hpp"
 #include "motion/errors.hpp"
 
 namespace {
@@ -65,60 +66,107 @@ TEST(DriveProfile, ShippedTemplateForARealDriveLoads) {
 
 TEST(DriveProfile, MissingFieldIsRefusedByName) {
   EXPECT_EQ(error_of(sim_with("target_y = 2[^\n]*", "")),
-            "p.toml: registers.target_y: missing (required)");
+            "p.toml: registers.target_y: missing; expected an integer in 0..65535");
 }
 
 TEST(DriveProfile, MissingTableIsRefusedByName) {
   const std::string text = read(kSim);
   const std::string cut =
       text.substr(0, text.find("\n[soft_limits]")) + text.substr(text.find("\n[alarms]"));
-  EXPECT_EQ(error_of(cut), "p.toml: soft_limits: missing table [soft_limits]");
+  EXPECT_EQ(error_of(cut), "p.toml: soft_limits: missing; expected a table [soft_limits]");
 }
 
 TEST(DriveProfile, MisspeltKeyIsRefusedByName) {
   EXPECT_EQ(error_of(sim_with("settle_time_ms = 20", "settle_time_ms = 20\nsettle_tme_ms = 5")),
-            "p.toml: motion.settle_tme_ms: unknown key (misspelt?)");
+            "p.toml: motion.settle_tme_ms = 5: unknown key (misspelt?); expected one of "
+            "default_speed_mm_s, max_speed_mm_s, position_tolerance_mm, home_x_mm, home_y_mm, "
+            "poll_interval_ms, settle_time_ms, settle_timeout_ms, home_timeout_ms");
 }
 
 TEST(DriveProfile, OverlappingRegistersAreRefused) {
   EXPECT_EQ(error_of(sim_with("target_y = 2", "target_y = 1")),
-            "p.toml: registers.target_y: registers 1..2 overlap registers.target_x (0..1)");
+            "p.toml: registers.target_y = 1: registers 1..2 overlap registers.target_x (0..1); "
+            "expected registers that no other field of the same table uses");
 }
 
 TEST(DriveProfile, FeedbackInHoldingMustNotOverlapWrites) {
   EXPECT_EQ(error_of(sim_with("feedback = \"input\"", "feedback = \"holding\"")),
-            "p.toml: registers.actual_x: registers 0..1 overlap registers.target_x (0..1)");
+            "p.toml: registers.actual_x = 0: registers 0..1 overlap registers.target_x (0..1); "
+            "expected registers that no other field of the same table uses");
 }
 
 TEST(DriveProfile, DuplicateStatusBitIsRefused) {
   EXPECT_EQ(error_of(sim_with("in_position = 2", "in_position = 1")),
-            "p.toml: status_bits.in_position: bit 1 is also status_bits.moving");
+            "p.toml: status_bits.in_position = 1: bit 1 is also status_bits.moving; expected a "
+            "bit that no other status uses");
 }
 
 TEST(DriveProfile, DuplicateCommandCodeIsRefused) {
   EXPECT_EQ(error_of(sim_with("stop = 3", "stop = 2")),
-            "p.toml: commands.stop: code 2 is also commands.home");
+            "p.toml: commands.stop = 2: code 2 is also commands.home; expected a code that no "
+            "other command uses");
 }
 
 TEST(DriveProfile, UnknownWordOrderIsRefused) {
   EXPECT_EQ(error_of(sim_with("word_order = \"high_first\"", "word_order = \"big\"")),
-            "p.toml: link.word_order: \"big\" is not \"high_first\" or \"low_first\"");
+            "p.toml: link.word_order = \"big\": expected \"high_first\" or \"low_first\"");
 }
 
 TEST(DriveProfile, EmptySoftLimitsAreRefused) {
   EXPECT_EQ(error_of(sim_with("x_max_mm = 900", "x_max_mm = -1")),
-            "p.toml: soft_limits.x_max_mm: must be > x_min_mm");
+            "p.toml: soft_limits.x_max_mm = -1: expected a limit > soft_limits.x_min_mm (0)");
 }
 
 TEST(DriveProfile, ToleranceFinerThanOneCountIsRefused) {
-  EXPECT_NE(error_of(sim_with("position_tolerance_mm = 0.002", "position_tolerance_mm = 0.0001"))
-                .find("p.toml: motion.position_tolerance_mm: 0.000100 mm is finer than one count"),
-            std::string::npos);
+  EXPECT_EQ(error_of(sim_with("position_tolerance_mm = 0.002", "position_tolerance_mm = 0.0001")),
+            "p.toml: motion.position_tolerance_mm = 0.0001: finer than one count, the bench "
+            "could never settle; expected a tolerance of at least one count (0.001 mm)");
 }
 
 TEST(DriveProfile, IntegerFieldGivenAsFloatIsRefused) {
   EXPECT_EQ(error_of(sim_with("unit_id = 1[^\n]*", "unit_id = 1.5")),
-            "p.toml: link.unit_id: expected an integer");
+            "p.toml: link.unit_id = 1.5: expected an integer in 0..255");
+}
+
+TEST(DriveProfile, AlarmCodesAreReadInHexOrDecimal) {
+  // Drive manuals often list alarm codes in hex: 0xB1 and 177 are the same code.
+  const motion::DriveProfile p = motion::parse_drive_profile(
+      sim_with("4 = \"bad command[^\n]*", "0xB1 = \"overload\"\n0x0A = \"ten\""), "p.toml");
+  EXPECT_EQ(p.alarm_meaning(177), "overload");
+  EXPECT_EQ(p.alarm_meaning(10), "ten");
+  EXPECT_EQ(p.alarm_meaning(3), "not homed: home before moving");
+  EXPECT_EQ(p.alarm_meaning(4), "unknown alarm code 4");
+}
+
+TEST(DriveProfile, AnAlarmCodeWrittenTwiceIsRefusedNamingBoth) {
+  EXPECT_EQ(error_of(sim_with("4 = \"bad command[^\n]*", "0x2 = \"again\"")),
+            "p.toml: alarms.2 = \"following error\": code 2 is also written as alarms.0x2; "
+            "expected each code once");
+}
+
+TEST(DriveProfile, AnAlarmKeyThatIsNotACodeIsRefused) {
+  EXPECT_EQ(error_of(sim_with("4 = \"bad command[^\n]*", "overload = \"x\"")),
+            "p.toml: alarms.overload = \"x\": expected an alarm code in 1..65535 as the key, in "
+            "decimal (177) or hex (0xB1)");
+}
+
+TEST(DriveProfile, MisspeltTableIsRefusedAndTheSimTableIsLeftToTheSimulatedBench) {
+  const std::string text = read(kSim);
+  EXPECT_NO_THROW(motion::parse_drive_profile(text, "p.toml"));  // has [sim]
+  EXPECT_EQ(error_of(text + "\n[simm]\nseed = 1\n"),
+            "p.toml: simm = { seed = 1 }: unknown key (misspelt?); expected one of name, link, "
+            "units, registers, status_bits, commands, motion, soft_limits, alarms, sim");
+}
+
+TEST(DriveProfile, AProfileThatIsAFolderIsRefusedAsABadConfigurationFile) {
+  try {
+    motion::load_drive_profile(RIG_SOURCE_DIR "/config/benches");
+    ADD_FAILURE() << "a folder loaded";
+  } catch (const config::ConfigError& e) {
+    EXPECT_NE(dynamic_cast<const motion::ProfileError*>(&e), nullptr);
+    EXPECT_EQ(std::string(e.what()), RIG_SOURCE_DIR
+              "/config/benches: is a folder; expected the drive profile, a regular file");
+  }
 }
 
 TEST(DriveProfile, WordOrdersRoundTripNegativeValues) {

@@ -76,8 +76,23 @@ TEST_F(RigFile, NonNumberElementIsAnErrorNamingIt) {
     vision::RigGeometry::load(path);
     FAIL();
   } catch (const vision::RigConfigError& e) {
-    EXPECT_NE(std::string(e.what()).find("target.origin_mm' element 1"), std::string::npos)
-        << e.what();
+    EXPECT_EQ(std::string(e.what()), path +
+                                         ": target.origin_mm = [600, \"far\", 0]: expected "
+                                         "[x, y, z], three finite numbers");
+  }
+}
+
+TEST_F(RigFile, MisspeltKeyIsAnErrorNamingIt) {
+  const std::string path = write(
+      "[camera_mount]\noffset_mm = [0, 0, 0]\nmisalignment_deg = [0, 0, 0]\n"
+      "[target]\norigin_mm = [600, 150, 0]\ntilt_deg = [0, 0, 0]\ntilt = [1, 0, 0]\n");
+  try {
+    vision::RigGeometry::load(path);
+    FAIL();
+  } catch (const vision::RigConfigError& e) {
+    EXPECT_EQ(std::string(e.what()), path +
+                                         ": target.tilt = [1, 0, 0]: unknown key (misspelt?); "
+                                         "expected one of origin_mm, tilt_deg");
   }
 }
 

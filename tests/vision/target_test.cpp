@@ -116,6 +116,24 @@ TEST(Target, SyntaxErrorNamesTheFileAndLine) {
   EXPECT_NE(message.find("line"), std::string::npos) << message;
 }
 
+TEST(Target, MisspeltKeyIsRejected) {
+  const std::string path = write_temp(
+      "misspelt",
+      kHeader + "quiet_cell = 2\n[[markers]]\nid = 0\nside_mm = 50\ncentre_mm = [0, 0]\n");
+  EXPECT_EQ(error_of(path), path +
+                                ": quiet_cell = 2: unknown key (misspelt?); expected one of name, "
+                                "paper, sheet_width_mm, sheet_height_mm, origin_mm, pose_marker, "
+                                "quiet_cells, markers");
+  const std::string in_marker = write_temp(
+      "misspelt_marker", kHeader + "[[markers]]\nid = 0\nside = 50\ncentre_mm = [0, 0]\n");
+  EXPECT_EQ(error_of(in_marker),
+            in_marker + ": markers[0].side_mm: missing; expected the marker side in mm > 0");
+}
+
+TEST(Target, ALayoutErrorIsAConfigError) {
+  EXPECT_THROW(Target::load("/nonexistent/layout.toml"), config::ConfigError);
+}
+
 TEST(Target, CustomSheetNeedsItsSize) {
   const std::string path = write_temp("custom",
                                       "paper = \"custom\"\norigin_mm = [50, 50]\npose_marker = 0\n"

@@ -1,9 +1,9 @@
 #include "vision/rig_geometry.hpp"
 
-#include <toml++/toml.h>
-
 #include <Eigen/Geometry>
-#include <cmath>
+#include <vector>
+
+#include "config/reader.hpp"
 
 namespace vision {
 namespace {
@@ -16,25 +16,10 @@ Eigen::Matrix3d rotation_from_vector_deg(const Eigen::Vector3d& r_deg) {
   return Eigen::AngleAxisd(angle, r_deg.normalized()).toRotationMatrix();
 }
 
-// table[section][key] as three finite numbers.
-Eigen::Vector3d read_vec3(const toml::table& table, const std::string& path,
-                          const std::string& section, const std::string& key) {
-  const std::string name = section + "." + key;
-  const toml::node* node = table.at_path(name).node();
-  if (node == nullptr)
-    throw RigConfigError(path + ": missing key '" + name + "' (expected [x, y, z])");
-  const toml::array* array = node->as_array();
-  if (array == nullptr || array->size() != 3)
-    throw RigConfigError(path + ": key '" + name + "' is not an array of three numbers");
-  Eigen::Vector3d v;
-  for (int i = 0; i < 3; ++i) {
-    const auto value = (*array)[static_cast<size_t>(i)].value<double>();
-    if (!value || !std::isfinite(*value))
-      throw RigConfigError(path + ": key '" + name + "' element " + std::to_string(i) +
-                           " is not a finite number");
-    v[i] = *value;
-  }
-  return v;
+// A vector [x, y, z] of the file.
+Eigen::Vector3d vec3(config::Table& table, const std::string& key) {
+  const std::vector<double> v = table.numbers(key, 3, 3, "[x, y, z], three finite numbers");
+  return Eigen::Vector3d(v[0], v[1], v[2]);
 }
 
 }  // namespace
@@ -60,20 +45,27 @@ RigGeometry RigGeometry::from_mount(const Eigen::Vector3d& mount_offset_mm,
   return g;
 }
 
-RigGeometry RigGeometry::load(const std::string& toml_path) {
-  toml::table table;
-  try {
-    table = toml::parse_file(toml_path);
-  } catch (const toml::parse_error& e) {
-    throw RigConfigError(toml_path + ": cannot read the rig file: " + std::string(e.description()));
-  }
-  // Read in file order, so that the first missing key is the one reported.
-  const Eigen::Vector3d offset = read_vec3(table, toml_path, "camera_mount", "offset_mm");
-  const Eigen::Vector3d misalignment =
-      read_vec3(table, toml_path, "camera_mount", "misalignment_deg");
-  const Eigen::Vector3d origin = read_vec3(table, toml_path, "target", "origin_mm");
-  const Eigen::Vector3d tilt = read_vec3(table, toml_path, "target", "tilt_deg");
+RigGeometry RigGeometry::read(config::Table& table) {
+  config::Table mount = table.table("camera_mount");
+  const Eigen::Vector3d offset = vec3(mount, "offset_mm");
+  const Eigen::Vector3d misalignment = vec3(mount, "misalignment_deg");
+  mount.reject_unknown();
+  config::Table target = table.table("target");
+  const Eigen::Vector3d origin = vec3(target, "origin_mm");
+  const Eigen::Vector3d tilt = vec3(target, "tilt_deg");
+  target.reject_unknown();
   return from_mount(offset, misalignment, origin, tilt);
+}
+
+RigGeometry RigGeometry::load(const config::Document& rig_file) {
+  config::Table root = rig_file.root();
+  const RigGeometry geometry = read(root);
+  root.reject_unknown();
+  return geometry;
+}
+
+RigGeometry RigGeometry::load(const std::string& toml_path) {
+  return load(config::Document::read<RigConfigError>(toml_path, "the rig file"));
 }
 
 Pose RigGeometry::T_bench_carriage(double x_mm, double y_mm) {

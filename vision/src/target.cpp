@@ -2,12 +2,12 @@
 // (see vision/target.hpp).
 #include "vision/target.hpp"
 
-#include <toml++/toml.h>
-
 #include <cmath>
+#include <limits>
 #include <set>
 #include <sstream>
 
+#include "config/reader.hpp"
 #include "vision/codebook.hpp"
 
 namespace vision {
@@ -15,6 +15,7 @@ namespace vision {
 namespace {
 
 constexpr double kMmPerM = 1000.0;
+constexpr std::int64_t kMaxInt = std::numeric_limits<int>::max();
 
 std::string fmt_mm(double metres) {
   std::ostringstream s;
@@ -22,64 +23,46 @@ std::string fmt_mm(double metres) {
   return s.str();
 }
 
-// Error messages name the file, the key, the value and what was expected.
+// "FILE: KEY = VALUE: expected EXPECTED" for a value in memory.
 [[noreturn]] void fail(const std::string& file, const std::string& key, const std::string& value,
                        const std::string& expected) {
-  throw TargetError(file + ": " + key + " = " + value + ": expected " + expected);
+  throw TargetError(config::error_message(file, key, value, expected));
 }
 
-std::string describe(const toml::node* node) {
-  if (node == nullptr) return "(missing)";
-  std::ostringstream s;
-  if (node->is_string()) {
-    s << '"' << node->value_or(std::string()) << '"';
-  } else if (node->is_array()) {
-    s << *node->as_array();
-  } else if (node->is_table()) {
-    s << "(a table)";
-  } else if (node->is_integer()) {
-    s << node->value_or<int64_t>(0);
-  } else if (node->is_floating_point()) {
-    s << node->value_or(0.0);
-  } else if (node->is_boolean()) {
-    s << (node->value_or(false) ? "true" : "false");
-  } else {
-    s << "(a date/time)";
-  }
-  return s.str();
+// An [x_mm, y_mm] pair in metres.
+Eigen::Vector2d pair_m(config::Table& t, const std::string& key) {
+  const std::vector<double> v = t.numbers(key, 2, 2, "an array of two numbers [x_mm, y_mm]");
+  return Eigen::Vector2d(v[0], v[1]) / kMmPerM;
 }
 
-double number(const std::string& file, const std::string& key, const toml::node* node,
-              const std::string& expected) {
-  if (node == nullptr || !(node->is_integer() || node->is_floating_point())) {
-    fail(file, key, describe(node), expected);
-  }
-  const double value = node->value_or(0.0);
-  if (!std::isfinite(value)) fail(file, key, describe(node), expected);
-  return value;
+// paper = "A4" | "A3" | "custom", and the sheet size in mm (required for a
+// custom sheet, else optional and equal to the standard size).
+void read_sheet(config::Table& root, Target* t) {
+  const std::string paper = root.choice_or("paper", "A4", {"A4", "A3", "custom"});
+  const bool custom = paper == "custom";
+  const double standard_width_mm = paper == "A3" ? 297 : 210;
+  const double standard_height_mm = paper == "A3" ? 420 : 297;
+  const std::string expected = custom ? "a sheet size in mm > 0 (required for paper = \"custom\")"
+                                      : "the size of " + paper + " (" +
+                                            std::to_string(int(standard_width_mm)) + " x " +
+                                            std::to_string(int(standard_height_mm)) + " mm)";
+  const auto size_mm = [&](const char* key, double standard) {
+    const config::NumberRule rule{
+        expected, [&](double v) { return custom ? v > 0 : std::abs(v - standard) <= 1e-9; }};
+    return custom ? root.number(key, rule) : root.number_or(key, standard, rule);
+  };
+  t->sheet_width_m = size_mm("sheet_width_mm", standard_width_mm) / kMmPerM;
+  t->sheet_height_m = size_mm("sheet_height_mm", standard_height_mm) / kMmPerM;
 }
 
-int integer(const std::string& file, const std::string& key, const toml::node* node,
-            const std::string& expected) {
-  if (node == nullptr || !node->is_integer()) fail(file, key, describe(node), expected);
-  const int64_t value = node->value_or<int64_t>(0);
-  if (value < -1000000 || value > 1000000) fail(file, key, describe(node), expected);
-  return static_cast<int>(value);
-}
-
-Eigen::Vector2d pair_mm(const std::string& file, const std::string& key, const toml::node* node) {
-  const std::string expected = "an array of two numbers [x_mm, y_mm]";
-  const toml::array* array = node != nullptr ? node->as_array() : nullptr;
-  if (array == nullptr || array->size() != 2) fail(file, key, describe(node), expected);
-  Eigen::Vector2d v;
-  for (size_t i = 0; i < 2; ++i) {
-    const toml::node* e = array->get(i);
-    if (!(e->is_integer() || e->is_floating_point()) || !std::isfinite(e->value_or(0.0))) {
-      fail(file, key, describe(node), expected);
-    }
-    v[static_cast<Eigen::Index>(i)] = e->value_or(0.0) / kMmPerM;
-  }
-  return v;
+TargetMarker read_marker(config::Table m) {
+  TargetMarker marker;
+  marker.id = static_cast<int>(m.integer("id", 0, kMaxInt, "an integer codebook id >= 0"));
+  marker.side_m =
+      m.number("side_mm", {"the marker side in mm > 0", [](double v) { return v > 0; }}) / kMmPerM;
+  marker.centre_m = pair_m(m, "centre_mm");
+  m.reject_unknown();
+  return marker;
 }
 
 // [x0, x1] x [y0, y1] of a marker with its quiet zone, target frame.
@@ -107,85 +90,33 @@ Target Target::paper_default() {
 }
 
 Target Target::load(const std::string& toml_path) {
-  toml::table root;
-  try {
-    root = toml::parse_file(toml_path);
-  } catch (const toml::parse_error& e) {
-    std::ostringstream s;
-    s << toml_path << ": not a readable TOML layout file (" << e.description();
-    if (e.source().begin.line > 0) s << " at line " << e.source().begin.line;
-    s << ")";
-    throw TargetError(s.str());
-  }
-  const std::string& f = toml_path;
+  const config::Document file = config::Document::read<TargetError>(toml_path, "the target layout");
+  config::Table root = file.root();
   Target t;
-  t.name = root["name"].value_or(std::string());
-
-  const std::string paper = root["paper"].value_or(std::string("A4"));
-  double width_mm = 0;
-  double height_mm = 0;
-  if (paper == "A4") {
-    width_mm = 210;
-    height_mm = 297;
-  } else if (paper == "A3") {
-    width_mm = 297;
-    height_mm = 420;
-  } else if (paper != "custom") {
-    fail(f, "paper", describe(root.get("paper")), "\"A4\", \"A3\" or \"custom\"");
+  t.name = root.string_or("name", "", "a name, free text");
+  read_sheet(root, &t);
+  t.sheet_origin_m = -pair_m(root, "origin_mm");
+  t.pose_marker_id = static_cast<int>(
+      root.integer("pose_marker", 0, kMaxInt, "the integer id of a listed marker"));
+  t.quiet_cells =
+      static_cast<int>(root.integer_or("quiet_cells", 1, 0, kMaxInt, "an integer >= 0"));
+  for (config::Table& marker :
+       root.tables("markers", "an array of tables [[markers]] with id, side_mm and centre_mm")) {
+    t.markers.push_back(read_marker(marker));
   }
-  const char* width_key = "sheet_width_mm";
-  const char* height_key = "sheet_height_mm";
-  if (paper == "custom" || root.contains(width_key) || root.contains(height_key)) {
-    const std::string expected =
-        paper == "custom" ? "a sheet size in mm > 0 (required for paper = \"custom\")"
-                          : "the size of " + paper + " (" + std::to_string(int(width_mm)) + " x " +
-                                std::to_string(int(height_mm)) + " mm)";
-    const double w = number(f, width_key, root.get(width_key), expected);
-    const double h = number(f, height_key, root.get(height_key), expected);
-    if (paper != "custom" && (std::abs(w - width_mm) > 1e-9 || std::abs(h - height_mm) > 1e-9)) {
-      fail(f, std::abs(w - width_mm) > 1e-9 ? width_key : height_key,
-           describe(root.get(std::abs(w - width_mm) > 1e-9 ? width_key : height_key)), expected);
-    }
-    if (w <= 0) fail(f, width_key, describe(root.get(width_key)), expected);
-    if (h <= 0) fail(f, height_key, describe(root.get(height_key)), expected);
-    width_mm = w;
-    height_mm = h;
-  }
-  t.sheet_width_m = width_mm / kMmPerM;
-  t.sheet_height_m = height_mm / kMmPerM;
-  t.sheet_origin_m = -pair_mm(f, "origin_mm", root.get("origin_mm"));
-  t.pose_marker_id =
-      integer(f, "pose_marker", root.get("pose_marker"), "the integer id of a listed marker");
-  t.quiet_cells = root.contains("quiet_cells")
-                      ? integer(f, "quiet_cells", root.get("quiet_cells"), "an integer >= 0")
-                      : 1;
-
-  const toml::array* markers = root["markers"].as_array();
-  if (markers == nullptr || markers->empty()) {
-    fail(f, "markers", describe(root.get("markers")),
-         "an array of tables [[markers]] with id, side_mm and centre_mm");
-  }
-  for (size_t i = 0; i < markers->size(); ++i) {
-    const std::string prefix = "markers[" + std::to_string(i) + "].";
-    const toml::table* m = markers->get(i)->as_table();
-    if (m == nullptr) fail(f, "markers[" + std::to_string(i) + "]", "(not a table)", "a table");
-    TargetMarker marker;
-    marker.id = integer(f, prefix + "id", m->get("id"), "an integer codebook id >= 0");
-    marker.side_m =
-        number(f, prefix + "side_mm", m->get("side_mm"), "the marker side in mm > 0") / kMmPerM;
-    marker.centre_m = pair_mm(f, prefix + "centre_mm", m->get("centre_mm"));
-    t.markers.push_back(marker);
-  }
+  root.reject_unknown();
   t.validate(toml_path);
   return t;
 }
 
 void Target::validate(const std::string& context) const {
   const std::string& f = context;
-  if (markers.empty()) fail(f, "markers", "(none)", "at least one marker");
-  if (!(sheet_width_m > 0) || !(sheet_height_m > 0)) {
-    fail(f, "sheet size", fmt_mm(sheet_width_m) + " x " + fmt_mm(sheet_height_m), "> 0");
+  if (markers.empty()) {
+    throw TargetError(
+        config::error_message(f, "markers", std::nullopt, "at least one marker", "none given"));
   }
+  if (!(sheet_width_m > 0)) fail(f, "sheet_width_mm", fmt_mm(sheet_width_m), "a size > 0 mm");
+  if (!(sheet_height_m > 0)) fail(f, "sheet_height_mm", fmt_mm(sheet_height_m), "a size > 0 mm");
   if (quiet_cells < 0) fail(f, "quiet_cells", std::to_string(quiet_cells), "an integer >= 0");
   std::set<int> ids;
   for (size_t i = 0; i < markers.size(); ++i) {

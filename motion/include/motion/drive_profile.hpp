@@ -1,13 +1,15 @@
 // motion::DriveProfile: everything ModbusBench knows about a drive, read from a
 // TOML file (config/benches/*.toml), never from code. The default map of the
-// simulated bench is docs/register-map.md and ships as config/benches/sim.toml; a documented template
-// for a real drive is config/benches/template_real_drive.toml.
+// simulated bench is docs/register-map.md and ships as config/benches/sim.toml; a documented
+// template for a real drive is config/benches/template_real_drive.toml.
 //
 // Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
 // Positions are signed 32-bit two's complement counts in two consecutive
 // registers, in the profile's word order; counts_per_mm converts them to mm.
 // Every field is required except the [alarms] table; a missing, unknown,
-// mistyped or inconsistent field throws ProfileError naming it.
+// mistyped or inconsistent field throws ProfileError naming it. [alarms] maps
+// alarm codes to their meanings; a code is written in decimal (177 = "...")
+// or in hex as drive manuals often list them (0xB1 = "..."), once.
 #pragma once
 
 #include <cstdint>
@@ -116,15 +118,19 @@ struct DriveProfile {
   std::string alarm_meaning(int code) const;
 };
 
-// Reads and validates a profile file. Throws ProfileError naming the file and
-// the field. Top-level tables other than the profile's own (e.g. [sim], read by
-// the simulated bench) are ignored; unknown keys inside the profile's tables
-// are refused, so a typo never silently falls back to a default.
+// Reads and validates a profile file (config/reader.hpp: a regular file of at
+// most 1 MiB). Throws ProfileError "FILE: TABLE.KEY = VALUE: [PROBLEM; ]expected
+// WHAT". The top-level [sim] table is the simulated bench's (sim/bench/config.hpp)
+// and is not read here; any other unknown key or table, at the top or inside
+// the profile's tables, is refused, so a typo never silently falls back to a
+// default.
 DriveProfile load_drive_profile(const std::string& path);
+// The same for TOML text read from `source` (named in messages).
 DriveProfile parse_drive_profile(std::string_view toml_text, const std::string& source);
 
 // Checks a profile built in code the same way a file is checked. Throws
-// ProfileError naming profile.source and the inconsistent field.
+// ProfileError "SOURCE: FIELD = VALUE: [PROBLEM; ]expected WHAT" naming
+// profile.source, the inconsistent field and its value.
 void validate(const DriveProfile& profile);
 
 // 32-bit two's complement value <-> two registers in the given word order.

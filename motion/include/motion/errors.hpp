@@ -6,21 +6,28 @@
 #include <stdexcept>
 #include <string>
 
+#include "config/error.hpp"
+
 namespace motion {
+
+// A drive profile (or bench URL) that is missing a field, has a field of the
+// wrong type or value, or is inconsistent (overlapping registers, duplicate
+// status bits or command codes, empty soft limits). Bad input, found before
+// anything is sent to a bench: a config::ConfigError, not a BenchError. A
+// profile's message has the form of every configuration file
+// (config/error.hpp), e.g.
+//   "sim.toml: registers.target_y = 1: registers 1..2 overlap registers.target_x
+//    (0..1); expected registers that no other field of the same table uses";
+// a bench URL's names the URL: "bench URL tcp://h:1: expected modbus-tcp://...".
+class ProfileError : public config::ConfigError {
+ public:
+  using config::ConfigError::ConfigError;
+};
 
 // Base of every bench error.
 class BenchError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
-};
-
-// A drive profile (or bench URL) that is missing a field, has a field of the
-// wrong type or value, or is inconsistent (overlapping registers, duplicate
-// status bits or command codes, empty soft limits). The message names the
-// source file and the field, e.g. "sim.toml: registers.target_y: ...".
-class ProfileError : public BenchError {
- public:
-  using BenchError::BenchError;
 };
 
 // A move refused before anything was sent: the target lies outside the soft

@@ -23,7 +23,6 @@
 
 #include "commands.hpp"
 #include "db/store/store.hpp"
-#include "motion/bench_url.hpp"
 #include "motion/modbus_bench.hpp"
 #include "rig/sweep/controller.hpp"
 #include "rig/sweep/run_start.hpp"
@@ -132,7 +131,7 @@ int run_on_bench(const SweepArgs& args, const sweep::SweepConfig& config,
                   << "; asking again (a controller that died may hold the camera until its "
                   << "heartbeat expires)\n";
       });
-  motion::ModbusBench bench(motion::BenchUrl::parse(config.bench_url), config.bench_profile);
+  motion::ModbusBench bench(config.bench_url, config.bench_profile);
   if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
   db::store::Store store = sweep::open_run_database(database, config);
 
@@ -157,12 +156,7 @@ int run_sweep(const SweepArgs& args) {
                    "continues a run on the bench; expected one of them");
   const sweep::SweepConfig config = sweep::load_sweep_config(args.sweep_file);
   const std::string database = args.database.empty() ? config.database_path : args.database;
-  telemetry::TelemetryEndpoints endpoints;
-  endpoints.publish = config.telemetry_publish;
-  endpoints.control = config.telemetry_control;
-  endpoints.allow_remote = config.telemetry_allow_remote;
-  validate_endpoints(endpoints);
-  SweepLink link(endpoints);
+  SweepLink link(config.telemetry);
   return args.replay_run > 0 ? run_replay(args, config, database, link)
                              : run_on_bench(args, config, database, link);
 }

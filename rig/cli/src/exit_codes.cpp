@@ -3,6 +3,7 @@
 #include <exception>
 #include <iostream>
 
+#include "config/error.hpp"
 #include "db/report/report.hpp"
 #include "db/store/store.hpp"
 #include "motion/errors.hpp"
@@ -40,6 +41,7 @@ const ErrorKind kErrorKinds[] = {
     {is<sweep::SweepConfigError>, kExitBadInput, ""},
     {is<sweep::PlanError>, kExitBadInput, ""},
     {is<sweep::RunMismatch>, kExitBadInput, ""},
+    {is<config::ConfigError>, kExitBadInput, ""},  // every config file: sweep, profile, target, rig
     {is<vision::CalibrationError>, kExitBadInput, ""},
     {is<vision::TargetError>, kExitBadInput, ""},
     {is<vision::ImageError>, kExitBadInput, ""},

@@ -214,7 +214,7 @@ class PositionMeasurer {
       rec.stage_times.push_back({"capture", seconds_since(capture_start)});
       const std::string unverified = unverified_reason(status.position);
       if (unverified.empty()) return frames;
-      if (attempt >= config_.faults.capture_retries) throw PositionFailure{"settle", unverified};
+      if (attempt >= config_.capture.retries) throw PositionFailure{"settle", unverified};
       log_.event("settle", unverified + "; frames taken again", index);
       rec.stage_times.clear();
     }
@@ -226,12 +226,12 @@ class PositionMeasurer {
     for (int k = 0; k < config_.frames_per_position; ++k) {
       for (int discarded = 0;; ++discarded) {
         camera_.trigger();
-        vision::Frame frame = camera_.grab(config_.faults.grab_timeout);
+        vision::Frame frame = camera_.grab(config_.grab_timeout);
         if (frame.host_time >= settled_at) {
           frames.push_back(std::move(frame));
           break;
         }
-        if (discarded >= config_.faults.capture_retries)
+        if (discarded >= config_.capture.retries)
           throw PositionFailure{"camera", "only frames exposed before the bench settled arrived"};
       }
     }

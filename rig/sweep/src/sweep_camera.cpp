@@ -12,7 +12,7 @@ bool camera_may_be_held(const vision::CaptureError& error) {
 
 void check_camera_frame(vision::FrameSource& camera, const SweepConfig& config) {
   camera.trigger();
-  const vision::Frame frame = camera.grab(config.faults.grab_timeout);
+  const vision::Frame frame = camera.grab(config.grab_timeout);
   if (const auto mismatch = config.camera.image_size_mismatch(
           frame.image.size(), "a frame of camera " + config.camera_spec,
           config.calibration_description()))

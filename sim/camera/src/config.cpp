@@ -1,73 +1,52 @@
 #include "sim/camera/config.hpp"
 
-#include <toml++/toml.h>
+#include <cstdint>
 
-#include <filesystem>
-#include <stdexcept>
-
+#include "config/reader.hpp"
 #include "vision/codebook.hpp"
 #include "vision/target.hpp"
 
 namespace sim::camera {
 namespace {
 
-class Reader {
- public:
-  Reader(const std::string& path, const toml::table& table) : path_(path), table_(table) {
-    folder_ = std::filesystem::path(path).parent_path();
-  }
-  template <typename T>
-  T get(const std::string& key, T fallback) const {
-    const toml::node* node = table_.at_path(key).node();
-    if (node == nullptr) return fallback;
-    const auto value = node->value<T>();
-    if (!value) throw std::runtime_error(path_ + ": key '" + key + "' has the wrong type");
-    return *value;
-  }
-  std::string required_path(const std::string& key) const {
-    const std::string value = get<std::string>(key, "");
-    if (value.empty())
-      throw std::runtime_error(path_ + ": missing key '" + key + "' (a file path)");
-    return resolve(value);
-  }
-  std::string resolve(const std::string& value) const {
-    if (value.empty() || std::filesystem::path(value).is_absolute()) return value;
-    return (folder_ / value).string();
-  }
+void read_bench(config::Table bench, SimRigConfig* c) {
+  c->bench_config = bench.existing_file("config", "a bench file (drive profile and [sim] table)");
+  c->bench_host = bench.string_or("host", c->bench_host, "a listening address, e.g. \"127.0.0.1\"");
+  c->bench_port = static_cast<int>(
+      bench.integer_or("port", c->bench_port, 0, 65535, "a TCP port 0..65535 (0: a free port)"));
+  bench.reject_unknown();
+}
 
- private:
-  std::string path_;
-  const toml::table& table_;
-  std::filesystem::path folder_;
-};
+void read_camera(config::Table camera, SimRigConfig* c) {
+  c->rig_geometry = camera.existing_file("rig", "a rig file (vision/rig_geometry.hpp)");
+  c->target = camera.existing_file("target", "a target layout (vision/target.hpp)");
+  const std::string calibration = camera.string_or(
+      "calibration", "", "a camera calibration file, or \"\" for the paper's Sony XC-555");
+  if (!calibration.empty()) {
+    c->calibration = camera.existing_file("calibration", "a camera calibration file");
+  }
+  CameraServerOptions& o = c->camera;
+  o.interface_address =
+      camera.string_or("address", o.interface_address, "a GigE Vision interface address");
+  o.serial = camera.string_or("serial", o.serial, "a serial number, e.g. \"RIGSIM01\"");
+  o.trigger_poll_hz = camera.number_or("trigger_poll_hz", o.trigger_poll_hz, config::positive());
+  o.nominal_exposure_us =
+      camera.number_or("nominal_exposure_us", o.nominal_exposure_us, config::positive());
+  o.seed = static_cast<std::uint64_t>(
+      camera.integer_or("seed", static_cast<std::int64_t>(o.seed), 0, INT64_MAX));
+  camera.reject_unknown();
+}
 
 }  // namespace
 
 SimRigConfig load_sim_rig_config(const std::string& path) {
-  toml::table table;
-  try {
-    table = toml::parse_file(path);
-  } catch (const toml::parse_error& e) {
-    throw std::runtime_error(path +
-                             ": cannot read the sim rig file: " + std::string(e.description()));
-  }
-  const Reader r(path, table);
+  const config::Document file =
+      config::Document::read<SimRigConfigError>(path, "the simulated rig file");
+  config::Table root = file.root();
   SimRigConfig c;
-  c.bench_config = r.required_path("bench.config");
-  c.bench_host = r.get<std::string>("bench.host", c.bench_host);
-  c.bench_port = static_cast<int>(r.get<int64_t>("bench.port", c.bench_port));
-  if (c.bench_port < 0 || c.bench_port > 65535)
-    throw std::runtime_error(path + ": key 'bench.port' = " + std::to_string(c.bench_port) +
-                             " is not a TCP port (0..65535)");
-  c.rig_geometry = r.required_path("camera.rig");
-  c.target = r.required_path("camera.target");
-  c.calibration = r.resolve(r.get<std::string>("camera.calibration", ""));
-  CameraServerOptions& o = c.camera;
-  o.interface_address = r.get<std::string>("camera.address", o.interface_address);
-  o.serial = r.get<std::string>("camera.serial", o.serial);
-  o.trigger_poll_hz = r.get<double>("camera.trigger_poll_hz", o.trigger_poll_hz);
-  o.nominal_exposure_us = r.get<double>("camera.nominal_exposure_us", o.nominal_exposure_us);
-  o.seed = static_cast<uint64_t>(r.get<int64_t>("camera.seed", static_cast<int64_t>(o.seed)));
+  read_bench(root.table("bench"), &c);
+  read_camera(root.table("camera"), &c);
+  root.reject_unknown();
   return c;
 }
 

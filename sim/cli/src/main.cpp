@@ -9,14 +9,12 @@
 #include <optional>
 #include <string>
 
+#include "config/error.hpp"
 #include "motion/drive_profile.hpp"
-#include "motion/errors.hpp"
 #include "sim/bench/config.hpp"
 #include "sim/bench/server.hpp"
 #include "sim/camera/config.hpp"
 #include "vision/camera.hpp"
-#include "vision/rig_geometry.hpp"
-#include "vision/target.hpp"
 
 namespace {
 
@@ -86,11 +84,7 @@ std::optional<int> start_or_exit_code(Start&& start) {
   try {
     start();
     return std::nullopt;
-  } catch (const motion::ProfileError& e) {
-    return fail(e, kExitBadInput);
-  } catch (const vision::RigConfigError& e) {
-    return fail(e, kExitBadInput);
-  } catch (const vision::TargetError& e) {
+  } catch (const config::ConfigError& e) {  // any of the TOML files
     return fail(e, kExitBadInput);
   } catch (const vision::CalibrationError& e) {
     return fail(e, kExitBadInput);

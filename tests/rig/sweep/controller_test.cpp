@@ -105,7 +105,7 @@ class ControllerTest : public ::testing::Test {
     config_ =
         rig::sweep::load_sweep_config(std::string(RIG_SOURCE_DIR) + "/config/sweeps/smoke.toml");
     config_.frames_per_position = 2;
-    config_.faults.capture_retries = 1;
+    config_.capture.retries = 1;
     config_.faults.max_consecutive_failed_positions = 3;
     config_.faults.link_retries = 1;
     store_ = std::make_unique<db::store::Store>((dir_ / "run.db").string());
@@ -167,7 +167,7 @@ TEST_F(ControllerTest, FramesExposedBeforeTheBenchSettledAreNeverKept) {
   EXPECT_EQ(outcome.status, db::store::RunStatus::kAborted);
   EXPECT_EQ(outcome.positions_failed, 3);
   EXPECT_NE(stored(0).failure_reason.find("exposed before the bench settled"), std::string::npos);
-  EXPECT_EQ(camera_.grabs, 3 * (1 + config_.faults.capture_retries));
+  EXPECT_EQ(camera_.grabs, 3 * (1 + config_.capture.retries));
 }
 
 TEST_F(ControllerTest, ABenchThatMovedDuringTheExposuresHasItsFramesRetakenThenFails) {
@@ -177,7 +177,7 @@ TEST_F(ControllerTest, ABenchThatMovedDuringTheExposuresHasItsFramesRetakenThenF
   config_.faults.max_consecutive_failed_positions = 1;
   const rig::sweep::RunOutcome outcome = sweep();
   EXPECT_EQ(outcome.status, db::store::RunStatus::kAborted);
-  EXPECT_EQ(bench_.settles, 1 + config_.faults.capture_retries);
+  EXPECT_EQ(bench_.settles, 1 + config_.capture.retries);
   EXPECT_NE(stored(0).failure_reason.find("moved"), std::string::npos);
 }
 

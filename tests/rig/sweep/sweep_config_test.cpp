@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "config/error.hpp"
 #include "rig/sweep/sweep_plan.hpp"
 
 namespace {
@@ -115,7 +116,9 @@ TEST(SweepConfigShipped, CiIsTheSimulatedRigWithAFewHundredPositions) {
   EXPECT_EQ(c.frames_per_position, 3);
   ASSERT_TRUE(c.speed_mm_s.has_value());
   EXPECT_EQ(*c.speed_mm_s, 100);
-  EXPECT_EQ(c.bench_url, "modbus-tcp://127.0.0.1:1502");
+  EXPECT_EQ(c.bench_url.transport, motion::BenchUrl::Transport::kTcp);
+  EXPECT_EQ(c.bench_url.host, "127.0.0.1");
+  EXPECT_EQ(c.bench_url.port, 1502);
   EXPECT_EQ(c.camera_spec, "gige:127.0.0.1");
   EXPECT_EQ(c.camera_calibration_path, "");
   EXPECT_EQ(c.camera.intrinsics().fx, vision::Camera::paper_default().intrinsics().fx);
@@ -175,14 +178,13 @@ TEST(SweepConfigShipped, SmokeIsTwelvePositionsOfTwoFramesWithDefaultsElsewhere)
   // No [settle], [telemetry]; most of [capture] and [faults] absent: the documented defaults.
   EXPECT_EQ(c.settle.timeout.count(), c.bench_profile.timing.settle_timeout_ms);
   EXPECT_EQ(c.settle.dwell.count(), 0);
-  EXPECT_EQ(c.telemetry_publish, "tcp://127.0.0.1:5556");
-  EXPECT_EQ(c.telemetry_control, "tcp://127.0.0.1:5557");
-  EXPECT_FALSE(c.telemetry_allow_remote);
+  EXPECT_EQ(c.telemetry.publish, "tcp://127.0.0.1:5556");
+  EXPECT_EQ(c.telemetry.control, "tcp://127.0.0.1:5557");
+  EXPECT_FALSE(c.telemetry.allow_remote);
   EXPECT_TRUE(c.durable_commits);
   EXPECT_TRUE(c.home_first);
-  EXPECT_EQ(c.faults.capture_retries, 2);
   EXPECT_EQ(c.capture.retries, 2);
-  EXPECT_EQ(c.faults.grab_timeout.count(), 2000);
+  EXPECT_EQ(c.grab_timeout.count(), 2000);
   EXPECT_EQ(c.faults.max_consecutive_failed_positions, 5);
   EXPECT_EQ(c.faults.link_retries, 3);
   EXPECT_EQ(c.capture.pixel_format, "Mono8");
@@ -298,6 +300,10 @@ TEST(SweepConfigValid, JsonHoldsEveryResolvedValue) {
   EXPECT_EQ(j["faults"]["on_alarm"], "pause");
   EXPECT_EQ(j["camera"]["fx"], vision::Camera::paper_default().intrinsics().fx);
   EXPECT_EQ(j["capture"]["exposure_us"], nullptr);  // not given: the camera keeps its own
+  EXPECT_EQ(j["capture"]["retries"], 2);
+  EXPECT_EQ(j["capture"]["grab_timeout_ms"], 2000);
+  EXPECT_EQ(j["bench"]["url"], "modbus-tcp://127.0.0.1:1502");
+  EXPECT_EQ(j["telemetry"]["control"], "tcp://127.0.0.1:5557");
 }
 
 // ---- malformed and inconsistent sweep files -------------------------------
@@ -494,6 +500,18 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"negative_dwell", "dwell_ms = 0", "dwell_ms = -1",
                 "settle.dwell_ms = -1: expected an integer in 0..3600000"},
         BadCase{"toml_syntax", "frames_per_position = 3", "frames_per_position = = 3",
-                "line 9: ", true}));
+                "line 9, column 23: ", true}));
+
+TEST(SweepConfigFile, AFolderOrAMissingFileIsRefusedAsTheSweepFile) {
+  const fs::path dir = temp_dir("folder");
+  EXPECT_EQ(load_error(dir.string()),
+            dir.string() + ": is a folder; expected the sweep file, a regular file");
+  EXPECT_EQ(load_error((dir / "none.toml").string()),
+            (dir / "none.toml").string() + ": does not exist; expected the sweep file");
+}
+
+TEST(SweepConfigFile, ItsErrorsAreConfigErrors) {
+  EXPECT_THROW(rig::sweep::load_sweep_config("/nonexistent/sweep.toml"), config::ConfigError);
+}
 
 }  // namespace

@@ -137,12 +137,26 @@ TEST(BenchSimConfig, FaultsAreReadFromTheFile) {
   EXPECT_EQ(c.faults.alarm_at->code, 2);
 }
 
+TEST(BenchSimConfig, AnInitialPositionOutsideTheTravelIsRefusedNamingTheDefault) {
+  try {
+    sim::bench::parse_bench_sim_config("[sim.y]\ntravel_min_mm = 10\n", "f.toml");
+    FAIL();
+  } catch (const motion::ProfileError& e) {
+    EXPECT_STREQ(e.what(),
+                 "f.toml: sim.y.initial_mm: not given, so 0 mm; expected a position within the "
+                 "travel 10..505 mm");
+  }
+}
+
 TEST(BenchSimConfig, MisspeltKeyIsRefusedByName) {
   try {
     sim::bench::parse_bench_sim_config("[sim.x]\naccel_mm_s = 5\n", "f.toml");
     FAIL();
   } catch (const motion::ProfileError& e) {
-    EXPECT_STREQ(e.what(), "f.toml: sim.x.accel_mm_s: unknown key (misspelt?)");
+    EXPECT_STREQ(e.what(),
+                 "f.toml: sim.x.accel_mm_s = 5: unknown key (misspelt?); expected one of "
+                 "max_speed_mm_s, accel_mm_s2, travel_min_mm, travel_max_mm, backlash_mm, "
+                 "repeatability_mm, initial_mm");
   }
 }
 

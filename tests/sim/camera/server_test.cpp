@@ -8,6 +8,7 @@
 #include "sim/camera/server.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
@@ -193,17 +194,39 @@ TEST(SimRigConfig, ShippedFileResolvesItsPathsAgainstItsFolder) {
   EXPECT_EQ(c.camera.trigger_poll_hz, 1000);
 }
 
-TEST(SimRigConfig, MissingFileOrKeyIsAnErrorNamingIt) {
-  EXPECT_THROW(sim::camera::load_sim_rig_config("/nonexistent/sim.toml"), std::runtime_error);
-  const auto path = std::filesystem::temp_directory_path() / "rig_sim_config_test.toml";
-  std::ofstream(path) << "[bench]\nconfig = \"b.toml\"\n";
+// A simulated rig file of this test process.
+std::string sim_rig_path() {
+  return (std::filesystem::temp_directory_path() /
+          ("rig_sim_config_test_" + std::to_string(::getpid()) + ".toml"))
+      .string();
+}
+
+// The message of the SimRigConfigError that loading a file of `text` throws,
+// after "PATH: ".
+std::string sim_rig_error(const std::string& text) {
+  std::ofstream(sim_rig_path()) << text;
+  std::string message = "(accepted)";
   try {
-    sim::camera::load_sim_rig_config(path.string());
-    ADD_FAILURE() << "a file without [camera] loaded";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("camera.rig"), std::string::npos) << e.what();
+    sim::camera::load_sim_rig_config(sim_rig_path());
+  } catch (const sim::camera::SimRigConfigError& e) {
+    message = e.what();
   }
-  std::filesystem::remove(path);
+  std::filesystem::remove(sim_rig_path());
+  const std::string prefix = sim_rig_path() + ": ";
+  return message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
+}
+
+TEST(SimRigConfig, MissingFileOrKeyIsAnErrorNamingIt) {
+  EXPECT_THROW(sim::camera::load_sim_rig_config("/nonexistent/sim.toml"),
+               sim::camera::SimRigConfigError);
+  const std::string bench = "[bench]\nconfig = \"" RIG_SOURCE_DIR "/config/benches/sim.toml\"\n";
+  EXPECT_EQ(sim_rig_error(bench), "camera: missing; expected a table [camera]");
+  EXPECT_EQ(sim_rig_error(bench + "[camera]\ntarget = \"x.toml\"\n"),
+            "camera.rig: missing; expected the path of a rig file (vision/rig_geometry.hpp)");
+  EXPECT_EQ(sim_rig_error(bench + "porrt = 1\n[camera]\n"),
+            "bench.porrt = 1: unknown key (misspelt?); expected one of config, host, port");
+  EXPECT_EQ(sim_rig_error(bench + "port = 70000\n"),
+            "bench.port = 70000: expected a TCP port 0..65535 (0: a free port)");
 }
 
 }  // namespace

@@ -24,21 +24,30 @@
 //   tilt_deg = [1.0, -2.0, 0.0]        # rotation vector about the nominal target axes
 // A rotation vector (rx, ry, rz) turns by |r| degrees about the axis r / |r|;
 // for the small angles of a mount error it is rx about x, ry about y, rz about z.
+// Every key is required; a key or table not listed is refused.
 #pragma once
 
 #include <Eigen/Core>
-#include <stdexcept>
 #include <string>
 
+#include "config/error.hpp"
 #include "vision/pose.hpp"
+
+namespace config {
+class Document;
+class Table;
+}  // namespace config
 
 namespace vision {
 
-// A rig file that cannot be read, lacks a key or holds a malformed value. The
-// message names the file, the key, the value and what was expected.
-class RigConfigError : public std::runtime_error {
+// A rig file that cannot be read, lacks a key, holds an unknown key or a
+// malformed value. The message names the file, the key, the value and what
+// was expected (config/reader.hpp), e.g.
+//   "sim.toml: target.origin_mm = [600, \"far\", 0]: expected [x, y, z], three finite numbers"
+// A config::ConfigError: bad input.
+class RigConfigError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 struct RigGeometry {
@@ -55,8 +64,17 @@ struct RigGeometry {
                                 const Eigen::Vector3d& target_origin_mm,
                                 const Eigen::Vector3d& target_tilt_deg);
 
-  // Reads a rig file (format above). Throws RigConfigError.
+  // Reads a rig file (format above; a regular file of at most 1 MiB). Throws
+  // RigConfigError.
   static RigGeometry load(const std::string& toml_path);
+  // The same from a parsed rig file (a caller that also keeps its text).
+  // Errors are the Document's (RigConfigError when read as a rig file).
+  static RigGeometry load(const config::Document& rig_file);
+  // Reads the tables [camera_mount] and [target] of `table` (a rig file's
+  // root, or the [rig] table of a sweep file that gives the geometry inline),
+  // refusing unknown keys inside them; the other keys of `table` are the
+  // caller's. Errors are the Table's, naming its file and the dotted key.
+  static RigGeometry read(config::Table& table);
 
   static Pose T_bench_carriage(double x_mm, double y_mm);
   // The true pose of the target in the camera frame with the carriage at (x_mm, y_mm).

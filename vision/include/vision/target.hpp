@@ -28,24 +28,28 @@
 //   id = 0                         # codebook id, >= 0, unique
 //   side_mm = 50.0                 # > 0
 //   centre_mm = [0.0, 0.0]         # in the target frame
-// A bad file throws TargetError naming the file, the key, the value and what
-// was expected.
+// A key not listed is refused (a typo never falls back to a default). A bad
+// file throws TargetError "FILE: KEY = VALUE: [PROBLEM; ]expected WHAT"
+// (config/reader.hpp), e.g. "paper.toml: markers[1].side_mm = -5: expected
+// the marker side in mm > 0".
 #pragma once
 
 #include <Eigen/Core>
 #include <array>
-#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "config/error.hpp"
+
 namespace vision {
 
-// A layout that cannot be read or is inconsistent (missing key, wrong type,
-// duplicate id, markers overlapping or off the sheet). The message names the
-// file, the key, the value and what was expected.
-class TargetError : public std::runtime_error {
+// A layout that cannot be read or is inconsistent (missing or unknown key,
+// wrong type, duplicate id, markers overlapping or off the sheet), or a marker
+// id the layout does not hold. The message names the file, the key, the value
+// and what was expected. A config::ConfigError: bad input.
+class TargetError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 struct TargetMarker {
@@ -75,7 +79,8 @@ struct Target {
   // (0, 90) mm.
   static Target paper_default();
 
-  // Reads a layout file (format above) and validates it. Throws TargetError.
+  // Reads a layout file (format above; a regular file of at most 1 MiB) and
+  // validates it. Throws TargetError.
   static Target load(const std::string& toml_path);
 
   // Checks the invariants: at least one marker, unique ids >= 0, sides > 0,

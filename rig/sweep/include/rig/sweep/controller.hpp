@@ -26,7 +26,7 @@
 // with a host time before the bench was settled is discarded (a free-running
 // source), and the read-back is checked again after the last frame; if the
 // bench moved by more than the profile's position tolerance meanwhile, the
-// frames are rejected and taken again (up to capture_retries times).
+// frames are rejected and taken again (up to capture.retries times).
 #pragma once
 
 #include <cstdint>

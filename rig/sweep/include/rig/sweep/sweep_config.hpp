@@ -70,11 +70,13 @@
 #include <chrono>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <stdexcept>
 #include <string>
 
+#include "config/error.hpp"
+#include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
 #include "rig/sweep/sweep_plan.hpp"
+#include "rig/telemetry/telemetry.hpp"
 #include "vision/camera.hpp"
 #include "vision/frame_source.hpp"
 #include "vision/rig_geometry.hpp"
@@ -88,9 +90,10 @@ namespace rig::sweep {
 //   "/abs/ci.toml: bench.url: missing; expected a bench URL modbus-tcp://HOST:PORT ..."
 // Errors of the files it names (profile, calibration, layout, rig, CSV plan)
 // are wrapped: the message names the sweep file and key, then quotes the cause.
-class SweepConfigError : public std::runtime_error {
+// A config::ConfigError: bad input.
+class SweepConfigError : public config::ConfigError {
  public:
-  using std::runtime_error::runtime_error;
+  using config::ConfigError::ConfigError;
 };
 
 struct SettlePolicy {
@@ -107,13 +110,6 @@ enum class AlarmAction { kPause, kAbort };
 struct FaultPolicy {
   // Bench alarm: stop, record, then pause (wait for `rig ctl resume`) or abort.
   AlarmAction on_alarm = AlarmAction::kPause;
-  // Re-triggers after a camera timeout or an incomplete frame before the
-  // position is marked failed; also how many frames stamped before the bench
-  // settled are discarded, and how many times the frames are taken again
-  // when the read-back moved during the exposures, before the position fails.
-  int capture_retries = 2;
-  // How long one grab waits for its frame.
-  std::chrono::milliseconds grab_timeout{2000};
   // Failed positions in a row after which the run is aborted (something is
   // structurally wrong: camera unplugged, target fallen over).
   int max_consecutive_failed_positions = 5;
@@ -139,12 +135,19 @@ struct SweepConfig {
   bool home_first = true;
   SettlePolicy settle;
   FaultPolicy faults;
-  std::string bench_url;           // e.g. "modbus-tcp://127.0.0.1:1502" (validated)
+  motion::BenchUrl bench_url;      // [bench] url, parsed
   std::string bench_profile_path;  // absolute
   motion::DriveProfile bench_profile;
   // e.g. "gige:127.0.0.1" (scheme validated); a replay folder is made absolute.
   std::string camera_spec;
-  vision::CaptureOptions capture;       // capture.retries == faults.capture_retries
+  // [capture] as the frame source takes it. capture.retries (the file's
+  // capture.retries) is also what the controller allows per position:
+  // re-triggers after a camera timeout or an incomplete frame, frames
+  // discarded for being stamped before the bench settled, and retakes when
+  // the read-back moved during the exposures, before the position fails.
+  vision::CaptureOptions capture;
+  // [capture] grab_timeout_ms: how long one grab waits for its frame.
+  std::chrono::milliseconds grab_timeout{2000};
   std::string camera_calibration_path;  // absolute, or "" = the paper's Sony XC-555
   vision::Camera camera = vision::Camera::paper_default();
   std::string target_layout_path;  // absolute
@@ -156,12 +159,12 @@ struct SweepConfig {
   // Saving keeps every frame for re-analysis (up to 0.4 MB per 736x571 Mono8
   // frame) at the cost of disk and an encode per frame.
   std::optional<std::string> frames_dir;
-  std::string database_path;                               // absolute; `rig sweep --db` overrides
-  std::string telemetry_publish = "tcp://127.0.0.1:5556";  // ZeroMQ PUB endpoint (bound)
-  std::string telemetry_control = "tcp://127.0.0.1:5557";  // ZeroMQ REP endpoint (bound)
-  // false: both endpoints must be loopback, so nobody on the network can
-  // pause or abort a run; true allows e.g. tcp://*:5556 for a remote monitor.
-  bool telemetry_allow_remote = false;
+  std::string database_path;  // absolute; `rig sweep --db` overrides
+  // [telemetry], validated as telemetry::validate_endpoints does (defaults:
+  // the TelemetryEndpoints defaults). allow_remote false: both endpoints must
+  // be loopback, so nobody on the network can pause or abort a run; true
+  // allows e.g. tcp://*:5556 for a remote monitor.
+  telemetry::TelemetryEndpoints telemetry;
   // fsync the database after every position: a power cut loses at most the
   // position being measured; false is faster on slow disks but may lose the
   // last positions (the run then resumes from an earlier one).
@@ -179,8 +182,9 @@ struct SweepConfig {
   nlohmann::json to_json() const;
 };
 
-// Reads, resolves and validates a sweep file (format above). Throws
-// SweepConfigError naming the file, the key, the value and what was expected.
+// Reads, resolves and validates a sweep file (format above; a regular file of
+// at most 1 MiB, config/reader.hpp). Throws SweepConfigError naming the file,
+// the key, the value and what was expected.
 SweepConfig load_sweep_config(const std::string& path);
 
 }  // namespace rig::sweep

@@ -66,9 +66,11 @@ struct BenchSimConfig {
   FaultPlan faults;
 };
 
-// Reads the [sim] table of a bench file (other tables are ignored). Throws
-// motion::ProfileError naming the file and the field. A file without [sim]
-// gives the defaults above.
+// Reads the [sim] table of a bench file; the other tables are the drive
+// profile's (motion::load_drive_profile checks them). Throws
+// motion::ProfileError "FILE: sim.TABLE.KEY = VALUE: [PROBLEM; ]expected WHAT"
+// (config/reader.hpp); an unknown key inside [sim] is refused. A file without
+// [sim] gives the defaults above.
 BenchSimConfig load_bench_sim_config(const std::string& path);
 BenchSimConfig parse_bench_sim_config(std::string_view toml_text, const std::string& source);
 

@@ -15,15 +15,25 @@
 //   trigger_poll_hz = 1000            # see sim::camera::CameraServerOptions
 //   nominal_exposure_us = 10000
 //   seed = 1
-// A bad file throws std::runtime_error naming the file, the key and the value.
+// Every path must name an existing file; a key or table not listed is refused.
 #pragma once
 
 #include <memory>
 #include <string>
 
+#include "config/error.hpp"
 #include "sim/camera/server.hpp"
 
 namespace sim::camera {
+
+// A simulated rig file that cannot be read, lacks a key, holds an unknown key
+// or a malformed value, or names a file that does not exist. The message
+// names the file, the key, the value and what was expected (config/reader.hpp):
+//   "sim.toml: bench.port = 70000: expected a TCP port 0..65535 (0: a free port)"
+class SimRigConfigError : public config::ConfigError {
+ public:
+  using config::ConfigError::ConfigError;
+};
 
 struct SimRigConfig {
   std::string bench_config;  // path, resolved against the file's folder
@@ -35,6 +45,8 @@ struct SimRigConfig {
   CameraServerOptions camera;
 };
 
+// Reads the file (format above; a regular file of at most 1 MiB). Throws
+// SimRigConfigError. The files it names are read by the bench and the camera.
 SimRigConfig load_sim_rig_config(const std::string& path);
 
 // The camera of the configured rig (renderer with default SceneOptions),
