@@ -8,7 +8,6 @@
 // detections through their frame_id indexes, so no pass scans a whole table of a file holding many
 // runs.
 #include <array>
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
