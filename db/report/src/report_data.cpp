@@ -1,6 +1,7 @@
 #include "report_data.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 #include <utility>
@@ -30,6 +31,9 @@ const char* const kFramesQuery =
     "SELECT p.plan_index, count(f.id) FROM positions p JOIN frames f ON f.position_id = p.id "
     "WHERE p.run_id = ?1 GROUP BY p.plan_index ORDER BY p.plan_index";
 
+namespace {
+
+// Rotation angle of R_a^T R_b for row-major rotations, degrees, in [0, 180].
 double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<double, 9>& R_b) {
   // trace(R_a^T R_b) = sum_ij R_a[i][j] R_b[i][j]; angle = acos((trace - 1) / 2).
   double trace = 0;
@@ -38,8 +42,6 @@ double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<dou
   const double c = std::clamp(0.5 * (trace - 1.0), -1.0, 1.0);
   return std::acos(c) * 180.0 / M_PI;
 }
-
-namespace {
 
 bool is_skipped(const std::string& termination) {
   return termination == "skipped" || termination == "not_applicable";

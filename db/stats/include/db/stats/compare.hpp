@@ -24,10 +24,6 @@ struct Difference {
   // whose standard errors are asymptotic (slopes, intercepts).
   double dof = std::numeric_limits<double>::infinity();
   bool significant = false;  // |difference| > k * standard_error
-  // Significantly larger / smaller than the baseline (for an error figure,
-  // larger is worse).
-  bool increased() const { return significant && difference > 0.0; }
-  bool decreased() const { return significant && difference < 0.0; }
 };
 
 // Welch's comparison of two means from independent samples:

@@ -1,6 +1,7 @@
 // Descriptive statistics for the report tables: mean, unbiased variance and
-// standard deviation (paper Tables 2, 3, 6), percentiles, and summaries per
-// distance class (paper Fig. 11: ten equal-width classes over [0.10, 1.00] m).
+// standard deviation (paper Tables 2, 3, 6), percentiles, and the
+// equal-width classes of distances (paper Fig. 11: ten classes over
+// [0.10, 1.00] m).
 #pragma once
 
 #include <cstddef>
@@ -84,25 +85,5 @@ class EqualWidthBins {
   std::size_t count_;
   double tolerance_;
 };
-
-// One class of a binned summary: its edges and the summary of the values whose
-// key fell in it.
-struct ClassSummary {
-  double lower = 0.0;
-  double upper = 0.0;
-  Summary summary;
-};
-
-struct BinnedSummary {
-  std::vector<ClassSummary> classes;  // bins.count() entries, empty classes included
-  std::size_t outside = 0;            // keys outside [lower, upper]
-};
-
-// Per-class summary of values[i] by the class of keys[i] (e.g. keys = true
-// distance in m, values = distance error in m).
-// Preconditions: keys.size() == values.size(), keys not NaN, values finite;
-// throws StatsError.
-BinnedSummary summarize_by_class(const EqualWidthBins& bins, const std::vector<double>& keys,
-                                 const std::vector<double>& values);
 
 }  // namespace db::stats
