@@ -78,28 +78,6 @@ std::int64_t pick_run(store::sqlite::Connection& connection, const std::string& 
                          " run(s), none completed); finish a sweep first or name one with --run");
 }
 
-// A deferred read transaction on a read-only connection: its snapshot is
-// taken at the first read and holds until commit (or destruction).
-class ReadTransaction {
- public:
-  explicit ReadTransaction(store::sqlite::Connection& connection) : connection_(connection) {
-    connection_.exec("BEGIN");
-  }
-  ~ReadTransaction() {
-    if (open_) sqlite3_exec(connection_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  ReadTransaction(const ReadTransaction&) = delete;
-  ReadTransaction& operator=(const ReadTransaction&) = delete;
-  void commit() {
-    connection_.exec("COMMIT");
-    open_ = false;
-  }
-
- private:
-  store::sqlite::Connection& connection_;
-  bool open_ = true;
-};
-
 // The slot in RunData::positions of a plan index met by a pass; every pass
 // reads the snapshot the slots came from, so a miss means the file is
 // inconsistent (a row of frames without its position).
@@ -439,7 +417,7 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   // the snapshot.
   store::sqlite::Connection connection(database, SQLITE_OPEN_READONLY);
   connection.exec("PRAGMA query_only = ON");
-  ReadTransaction transaction(connection);
+  store::sqlite::Transaction transaction(connection, store::sqlite::Transaction::Kind::kRead);
   const std::int64_t id = pick_run(connection, database, run_id);
   data.run = read_run(connection, *store, database, id);
   Slots slots(database, id);
