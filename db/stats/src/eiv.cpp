@@ -118,17 +118,12 @@ void check_york_points(const char* name, const YorkPoints& p) {
 // Step 1: the OLS slope as the starting value. Throws StatsError when every
 // x is equal.
 double ols_start_slope(const char* name, const YorkPoints& p) {
-  const double mx0 = detail::accurate_mean(p.x), my0 = detail::accurate_mean(p.y);
-  double sxx = 0.0, sxy = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    sxx += (p.x[i] - mx0) * (p.x[i] - mx0);
-    sxy += (p.x[i] - mx0) * (p.y[i] - my0);
-  }
-  if (!(sxx > 0.0)) {
-    throw StatsError(std::string(name) + ": every x equals " + std::to_string(mx0) +
+  const detail::CentredMoments m = detail::centred_moments(p.x, p.y);
+  if (!(m.sxx > 0.0)) {
+    throw StatsError(std::string(name) + ": every x equals " + std::to_string(m.mean_x) +
                      "; expected at least two distinct x values");
   }
-  return sxy / sxx;
+  return m.sxy / m.sxx;
 }
 
 // Steps 2-5 at one slope: the weights W_i, the weighted centroid
