@@ -230,7 +230,8 @@ void read_frame_counts(store::sqlite::Connection& connection, std::int64_t id, c
 }
 
 // The columns of kEstimatesQuery.
-enum EstimateColumn : int {
+namespace estimate_column {
+enum : int {
   kPlanIndex = 0,
   kFrameIndex = 1,
   kSolver = 2,
@@ -244,17 +245,30 @@ enum EstimateColumn : int {
   kTime = 18,
   kAmbiguity = 19,
 };
+}  // namespace estimate_column
+
+// The columns of kDetectionsQuery.
+namespace detection_column {
+enum : int {
+  kPlanIndex = 0,
+  kMarkerId = 2,
+  kCorners = 3,  // a_x, a_y, b_x, ..., d_y: columns 3 .. 10
+  kEdgeFitResidual = 11,
+};
+}  // namespace detection_column
 
 // One row's numbers; absent or non-finite optional figures are NaN (the
 // status is set by status_of).
 EstimateSample sample_of(const store::sqlite::Statement& row, std::uint32_t slot) {
   EstimateSample s;
   s.position = slot;
-  s.distance_m = row.get_double(kDistance);
-  s.reprojection_px = row.get_double(kReprojection);
-  if (!row.is_null(kGeneralization)) s.generalization_px = row.get_double(kGeneralization);
-  s.time_us = row.get_double(kTime);
-  if (!row.is_null(kAmbiguity)) s.ambiguity_ratio = row.get_double(kAmbiguity);
+  s.distance_m = row.get_double(estimate_column::kDistance);
+  s.reprojection_px = row.get_double(estimate_column::kReprojection);
+  if (!row.is_null(estimate_column::kGeneralization))
+    s.generalization_px = row.get_double(estimate_column::kGeneralization);
+  s.time_us = row.get_double(estimate_column::kTime);
+  if (!row.is_null(estimate_column::kAmbiguity))
+    s.ambiguity_ratio = row.get_double(estimate_column::kAmbiguity);
   if (!std::isfinite(s.generalization_px)) s.generalization_px = kNaN;
   if (!std::isfinite(s.time_us)) s.time_us = kNaN;
   if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
@@ -267,14 +281,14 @@ EstimateSample sample_of(const store::sqlite::Statement& row, std::uint32_t slot
 // failure under its own name rather than poisoning every mean of the report.
 SampleStatus status_of(const store::sqlite::Statement& row, const EstimateSample& s,
                        std::map<std::string, std::size_t>& failures_by_termination) {
-  if (row.get_int(kConverged) != 0) {
+  if (row.get_int(estimate_column::kConverged) != 0) {
     if (std::isfinite(s.distance_m) && std::isfinite(s.reprojection_px)) {
       return SampleStatus::kConverged;
     }
     ++failures_by_termination["converged with a non-finite value"];
     return SampleStatus::kFailed;
   }
-  const std::string termination = row.get_text(kTermination);
+  const std::string termination = row.get_text(estimate_column::kTermination);
   if (is_skipped(termination)) return SampleStatus::kSkipped;
   ++failures_by_termination[termination];
   return SampleStatus::kFailed;
@@ -311,7 +325,7 @@ class EstimatesPass {
     FrameRotations& fr = frame_rotations_[solver];
     fr.has[which] = true;
     for (int k = 0; k < 9; ++k)
-      fr.R[which][k] = row.get_double(kRotation + k);
+      fr.R[which][k] = row.get_double(estimate_column::kRotation + k);
   }
 
   // After the last row: the last frame's flips, and the solvers sorted by
@@ -354,9 +368,10 @@ void read_estimates(store::sqlite::Connection& connection, std::int64_t id, cons
   select.bind(1, id);
   std::string solver, scope;
   while (select.step()) {
-    pass.enter_frame(select.get_int64(kPlanIndex), select.get_int64(kFrameIndex));
-    solver = select.get_text(kSolver);
-    scope = select.get_text(kScope);
+    pass.enter_frame(select.get_int64(estimate_column::kPlanIndex),
+                     select.get_int64(estimate_column::kFrameIndex));
+    solver = select.get_text(estimate_column::kSolver);
+    scope = select.get_text(estimate_column::kScope);
     SolverScopeData& target = pass.data_of(solver, scope);
     EstimateSample s = sample_of(select, pass.slot());
     s.status = status_of(select, s, target.failures_by_termination);
@@ -375,7 +390,7 @@ void read_detections(store::sqlite::Connection& connection, std::int64_t id, con
   std::map<int, CornerSeries> series;
   std::int64_t current_plan = -1;
   while (select.step()) {
-    const std::int64_t plan = select.get_int64(0);
+    const std::int64_t plan = select.get_int64(detection_column::kPlanIndex);
     if (plan != current_plan) {
       if (current_plan >= 0)
         flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
@@ -384,15 +399,15 @@ void read_detections(store::sqlite::Connection& connection, std::int64_t id, con
     std::array<double, 8> c;
     bool finite = true;
     for (int k = 0; k < 8; ++k) {
-      c[k] = select.get_double(3 + k);
+      c[k] = select.get_double(detection_column::kCorners + k);
       finite = finite && std::isfinite(c[k]);
     }
-    const double edge = select.get_double(11);
+    const double edge = select.get_double(detection_column::kEdgeFitResidual);
     if (!finite || !std::isfinite(edge)) {
       ++data.nonfinite_detections;
       continue;
     }
-    CornerSeries& s = series[select.get_int(2)];
+    CornerSeries& s = series[select.get_int(detection_column::kMarkerId)];
     s.corners.push_back(c);
     s.edge.add(edge);
   }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include "db/stats/eiv.hpp"
 #include "db/stats/error.hpp"
@@ -92,7 +93,8 @@ struct SolverAccumulator {
   std::vector<double> x, y;           // true and estimated distance of every used estimate, m
   std::vector<PositionGroup> groups;  // the positions with used estimates, by plan index
   // Over positions: each one's mean |error|, reprojection and generalization
-  // error, and the pooled sd of its estimates.
+  // error; and the spread of the distance within a position, pooled (the
+  // y error of the Deming fit).
   stats::RunningSummary position_abs, position_reprojection, position_generalization;
   Pooled jitter;
 };
@@ -236,14 +238,13 @@ void add_estimates(const RunData& data, const SolverScopeData& rows, const Posit
   }
 }
 
-// One position's group into its class: bias, jitter and, where the position
-// has a Cramér-Rao bound and the class a corner noise, the efficiency sums.
-void add_position_to_class(const PositionGroup& g, const store::PositionRecord& p,
-                           const std::string& scope, double sigma_px, ClassAccumulator& a) {
-  const stats::Summary d = g.distance.summary();
-  a.bias.add(d.mean - *p.true_distance_m);
+// One position's distances d (its used estimates, m) into its class: bias,
+// jitter and, where the position has a Cramér-Rao bound (m/px) and the class
+// a corner noise (px), the efficiency sums.
+void add_position_to_class(const stats::Summary& d, double truth, std::optional<double> bound,
+                           double sigma_px, ClassAccumulator& a) {
+  a.bias.add(d.mean - truth);
   a.jitter.add(d);
-  const auto bound = bound_of(p, scope);
   if (bound && d.count >= 2 && std::isfinite(sigma_px)) {
     const double n1 = static_cast<double>(d.count - 1);
     a.bound_sum_squares += n1 * sigma_px * sigma_px * *bound * *bound;
@@ -275,8 +276,9 @@ void add_positions(const RunData& data, const std::vector<ClassCornerNoise>& cor
       s.plot_estimated_m.push_back(d.mean);
     }
     if (!g.distance_class) continue;
-    add_position_to_class(g, p, s.scope, corner_noise[*g.distance_class].sigma_px,
-                          acc.classes[*g.distance_class]);
+    const std::size_t c = *g.distance_class;
+    add_position_to_class(d, *p.true_distance_m, bound_of(p, s.scope), corner_noise[c].sigma_px,
+                          acc.classes[c]);
   }
 }
 
