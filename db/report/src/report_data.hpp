@@ -3,9 +3,10 @@
 // database in a few indexed passes (private to db_report).
 //
 // Query plans (checked by ReportQueries.UseTheIndexesAndScanNoTable in
-// tests/db/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass starts from positions
-// (run_id, plan_index), reaches frames through (position_id, frame_index) and estimates or
-// detections through their frame_id indexes, so no pass scans a whole table of a file holding many
+// tests/db/report/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass
+// starts from positions (run_id, plan_index), reaches frames through
+// (position_id, frame_index) and estimates or detections through their
+// frame_id indexes, so no pass scans a whole table of a file holding many
 // runs.
 #include <cstdint>
 #include <limits>
