@@ -75,6 +75,134 @@ std::array<double, 9> rotation_x(double angle_rad) {
   return {1, 0, 0, 0, c, -s, 0, s, c};
 }
 
+// The run's random draws, from one generator in the order the run makes them.
+class Draws {
+ public:
+  explicit Draws(std::uint64_t seed) : rng_(seed) {}
+  double normal() { return normal_(rng_); }
+  double uniform() { return uniform_(rng_); }
+
+ private:
+  std::mt19937_64 rng_;
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+};
+
+// Plan index i's bench position and truth, without frames or physics.
+db::store::PositionRecord position_at(const SyntheticRunSpec& spec, int i) {
+  db::store::PositionRecord p;
+  p.plan_index = i;
+  const double d = synthetic_true_distance(spec, i);
+  p.commanded_x_mm = 1000.0 * d;
+  p.commanded_y_mm = 0.0;
+  p.measured_x_mm = p.commanded_x_mm;
+  p.measured_y_mm = 0.0;
+  p.true_distance_m = d;
+  p.settle_time_s = 0.2;
+  return p;
+}
+
+// Viewing angle, Cramér-Rao bounds of both scopes and the four visible
+// markers of a measured position (side_px: each marker's side).
+void add_physics(const SyntheticRunSpec& spec, double side_px, db::store::PositionRecord& p) {
+  const int i = static_cast<int>(p.plan_index);
+  const double d = *p.true_distance_m;
+  p.true_viewing_angle_deg = 60.0 * std::fmod(0.37 * i, 1.0);
+  p.distance_bounds = {{"0", synthetic_bound(spec, d)}, {"target", 0.5 * synthetic_bound(spec, d)}};
+  for (int m = 0; m < 4; ++m) {
+    const bool planted = spec.plant_nonfinite_detection && i == 1 && m == 2;
+    p.visible_markers.push_back({m, planted ? HUGE_VAL : side_px});
+  }
+}
+
+void add_stage_times(const SyntheticRunSpec& spec, db::store::PositionRecord& p) {
+  p.stage_times = {{"move", 0.5}, {"settle", 0.2}, {"capture", 0.03}, {"detect", 0.004}};
+  for (const SyntheticSolver& s : spec.solvers)
+    p.stage_times.push_back({"solve:" + s.name, 1e-6 * s.time_us * spec.frames_per_position});
+  p.stage_times.push_back({"store", 0.002});
+}
+
+// Markers 0-3 side by side as squares of side_px, each corner jittered;
+// marker 3 lost beyond marker3_lost_beyond_m.
+void add_detections(const SyntheticRunSpec& spec, int i, double d, double side_px, Draws& draws,
+                    db::store::FrameRecord& frame) {
+  for (int m = 0; m < 4; ++m) {
+    if (m == 3 && d > spec.marker3_lost_beyond_m) continue;
+    db::store::DetectionRecord det;
+    det.marker_id = m;
+    const double x0 = 100.0 + 3.0 * side_px * m, y0 = 200.0;
+    const double square[8] = {x0,           y0,           x0 + side_px, y0,
+                              x0 + side_px, y0 + side_px, x0,           y0 + side_px};
+    for (int c = 0; c < 8; ++c)
+      det.corners_px[c] = square[c] + spec.corner_noise_px * draws.normal();
+    if (spec.plant_nonfinite_detection && i == 0 && frame.index == 0 && m == 1)
+      det.corners_px[3] = HUGE_VAL;
+    det.contrast = 150;
+    det.edge_fit_residual_px = 0.1 + 2.0 / side_px;
+    frame.detections.push_back(det);
+  }
+}
+
+// One solver's estimates of one frame on scopes "0" and "target".
+void add_estimates(const SyntheticRunSpec& spec, const SyntheticSolver& s, double d, Draws& draws,
+                   db::store::FrameRecord& frame) {
+  const double sd = s.efficiency > 0
+                        ? std::sqrt(s.efficiency) * spec.corner_noise_px * synthetic_bound(spec, d)
+                        : s.frame_sd_m;
+  const bool flipped = draws.uniform() < s.flip_rate;
+  for (const char* scope : {"0", "target"}) {
+    db::store::EstimateRecord e;
+    e.solver = s.name;
+    e.scope = scope;
+    const bool pose_marker = std::string(scope) == "0";
+    e.R_cam_target = rotation_x(pose_marker && flipped ? 60.0 * M_PI / 180.0 : 0.0);
+    e.time_us = s.time_us;
+    if (!pose_marker && s.single_square_only) {
+      e.converged = false;
+      e.termination = "not_applicable";
+      e.time_us = 0.1;
+      frame.estimates.push_back(e);
+      continue;
+    }
+    e.distance_m = s.slope * d + s.intercept_m + sd * draws.normal();
+    e.t_cam_target_m = {0, 0, e.distance_m};
+    e.reprojection_error_px =
+        std::max(0.01, s.reprojection_mean_px + s.reprojection_sd_px * draws.normal());
+    if (pose_marker) {
+      e.generalization_error_px =
+          std::max(0.01, s.generalization_mean_px + s.generalization_sd_px * draws.normal());
+    }
+    e.converged = !(draws.uniform() < s.failure_rate);
+    e.termination = e.converged ? "converged" : "max_iterations";
+    e.iterations = 5;
+    if (!std::isnan(s.ambiguity_ratio)) e.ambiguity_ratio = s.ambiguity_ratio;
+    frame.estimates.push_back(e);
+  }
+}
+
+// The frames of a measured position; returns the number of estimates.
+std::size_t add_frames(const SyntheticRunSpec& spec, Draws& draws, db::store::PositionRecord& p) {
+  const int i = static_cast<int>(p.plan_index);
+  const double d = *p.true_distance_m;
+  // Side of a 5 cm marker in px at d with the paper's ~720 px focal length.
+  const double side_px = 0.05 * 720.0 / d;
+  if (spec.record_physics) add_physics(spec, side_px, p);
+  add_stage_times(spec, p);
+  std::size_t estimates = 0;
+  for (int f = 0; f < spec.frames_per_position; ++f) {
+    db::store::FrameRecord frame;
+    frame.index = f;
+    frame.host_timestamp_ns = 1'700'000'000'000'000'000LL + 1'000'000'000LL * i + f;
+    frame.source = "synthetic";
+    add_detections(spec, i, d, side_px, draws, frame);
+    for (const SyntheticSolver& s : spec.solvers)
+      add_estimates(spec, s, d, draws, frame);
+    estimates += frame.estimates.size();
+    p.frames.push_back(std::move(frame));
+  }
+  return estimates;
+}
+
 }  // namespace
 
 SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec& spec) {
@@ -83,98 +211,16 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
   db::store::Store store(path, options);
   SyntheticRun out;
   out.run_id = store.start_run(description(spec));
-  std::mt19937_64 rng(spec.seed);
-  std::normal_distribution<double> normal(0.0, 1.0);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  Draws draws(spec.seed);
   const int ok_positions = spec.positions - spec.failed_positions;
   for (int i = 0; i < spec.positions; ++i) {
-    db::store::PositionRecord p;
-    p.plan_index = i;
-    const double d = synthetic_true_distance(spec, i);
-    p.commanded_x_mm = 1000.0 * d;
-    p.commanded_y_mm = 0.0;
-    p.measured_x_mm = p.commanded_x_mm;
-    p.measured_y_mm = 0.0;
-    p.true_distance_m = d;
-    p.settle_time_s = 0.2;
+    db::store::PositionRecord p = position_at(spec, i);
     if (i >= ok_positions) {
       p.status = db::store::PositionStatus::kFailed;
       p.failure_reason = "synthetic: bench alarm";
       p.stage_times = {{"move", 0.5}};
-      store.append_position(out.run_id, p);
-      continue;
-    }
-    // Side of a 5 cm marker in px at d with the paper's ~720 px focal length.
-    const double side_px = 0.05 * 720.0 / d;
-    if (spec.record_physics) {
-      p.true_viewing_angle_deg = 60.0 * std::fmod(0.37 * i, 1.0);
-      p.distance_bounds = {{"0", synthetic_bound(spec, d)},
-                           {"target", 0.5 * synthetic_bound(spec, d)}};
-      for (int m = 0; m < 4; ++m) {
-        const bool planted = spec.plant_nonfinite_detection && i == 1 && m == 2;
-        p.visible_markers.push_back({m, planted ? HUGE_VAL : side_px});
-      }
-    }
-    p.stage_times = {{"move", 0.5}, {"settle", 0.2}, {"capture", 0.03}, {"detect", 0.004}};
-    for (const SyntheticSolver& s : spec.solvers)
-      p.stage_times.push_back({"solve:" + s.name, 1e-6 * s.time_us * spec.frames_per_position});
-    p.stage_times.push_back({"store", 0.002});
-    for (int f = 0; f < spec.frames_per_position; ++f) {
-      db::store::FrameRecord frame;
-      frame.index = f;
-      frame.host_timestamp_ns = 1'700'000'000'000'000'000LL + 1'000'000'000LL * i + f;
-      frame.source = "synthetic";
-      for (int m = 0; m < 4; ++m) {
-        if (m == 3 && d > spec.marker3_lost_beyond_m) continue;
-        db::store::DetectionRecord det;
-        det.marker_id = m;
-        const double x0 = 100.0 + 3.0 * side_px * m, y0 = 200.0;
-        const double square[8] = {x0,           y0,           x0 + side_px, y0,
-                                  x0 + side_px, y0 + side_px, x0,           y0 + side_px};
-        for (int c = 0; c < 8; ++c)
-          det.corners_px[c] = square[c] + spec.corner_noise_px * normal(rng);
-        if (spec.plant_nonfinite_detection && i == 0 && f == 0 && m == 1)
-          det.corners_px[3] = HUGE_VAL;
-        det.contrast = 150;
-        det.edge_fit_residual_px = 0.1 + 2.0 / side_px;
-        frame.detections.push_back(det);
-      }
-      for (const SyntheticSolver& s : spec.solvers) {
-        const double sd = s.efficiency > 0 ? std::sqrt(s.efficiency) * spec.corner_noise_px *
-                                                 synthetic_bound(spec, d)
-                                           : s.frame_sd_m;
-        const bool flipped = uniform(rng) < s.flip_rate;
-        for (const char* scope : {"0", "target"}) {
-          db::store::EstimateRecord e;
-          e.solver = s.name;
-          e.scope = scope;
-          const bool pose_marker = std::string(scope) == "0";
-          e.R_cam_target = rotation_x(pose_marker && flipped ? 60.0 * M_PI / 180.0 : 0.0);
-          e.time_us = s.time_us;
-          if (!pose_marker && s.single_square_only) {
-            e.converged = false;
-            e.termination = "not_applicable";
-            e.time_us = 0.1;
-            frame.estimates.push_back(e);
-            continue;
-          }
-          e.distance_m = s.slope * d + s.intercept_m + sd * normal(rng);
-          e.t_cam_target_m = {0, 0, e.distance_m};
-          e.reprojection_error_px =
-              std::max(0.01, s.reprojection_mean_px + s.reprojection_sd_px * normal(rng));
-          if (pose_marker) {
-            e.generalization_error_px =
-                std::max(0.01, s.generalization_mean_px + s.generalization_sd_px * normal(rng));
-          }
-          e.converged = !(uniform(rng) < s.failure_rate);
-          e.termination = e.converged ? "converged" : "max_iterations";
-          e.iterations = 5;
-          if (!std::isnan(s.ambiguity_ratio)) e.ambiguity_ratio = s.ambiguity_ratio;
-          frame.estimates.push_back(e);
-        }
-      }
-      out.estimates += frame.estimates.size();
-      p.frames.push_back(std::move(frame));
+    } else {
+      out.estimates += add_frames(spec, draws, p);
     }
     store.append_position(out.run_id, p);
   }

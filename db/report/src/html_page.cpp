@@ -149,10 +149,6 @@ void Page::paragraph(const std::string& text) {
   body_ += "<p>" + escape(text) + "</p>\n";
 }
 
-void Page::raw_html(const std::string& html) {
-  body_ += html + "\n";
-}
-
 void Page::table(const Table& t) {
   if (!t.id.empty()) claim_id(t.id, "table");
   const std::string name = t.id.empty() ? "'" + t.caption + "'" : "'" + t.id + "'";

@@ -1,4 +1,4 @@
-// db::report::Report: study, comparison and the three outputs (see db/report.hpp).
+// db::report::Report: study, comparison and the three outputs (see db/report/report.hpp).
 #include "db/report/report.hpp"
 
 #include <cctype>

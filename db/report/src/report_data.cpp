@@ -1,6 +1,7 @@
 #include "report_data.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <unordered_map>
 #include <utility>
@@ -30,6 +31,9 @@ const char* const kFramesQuery =
     "SELECT p.plan_index, count(f.id) FROM positions p JOIN frames f ON f.position_id = p.id "
     "WHERE p.run_id = ?1 GROUP BY p.plan_index ORDER BY p.plan_index";
 
+namespace {
+
+// Rotation angle of R_a^T R_b for row-major rotations, degrees, in [0, 180].
 double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<double, 9>& R_b) {
   // trace(R_a^T R_b) = sum_ij R_a[i][j] R_b[i][j]; angle = acos((trace - 1) / 2).
   double trace = 0;
@@ -38,8 +42,6 @@ double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<dou
   const double c = std::clamp(0.5 * (trace - 1.0), -1.0, 1.0);
   return std::acos(c) * 180.0 / M_PI;
 }
-
-namespace {
 
 bool is_skipped(const std::string& termination) {
   return termination == "skipped" || termination == "not_applicable";
@@ -76,28 +78,6 @@ std::int64_t pick_run(store::sqlite::Connection& connection, const std::string& 
                          " run(s), none completed); finish a sweep first or name one with --run");
 }
 
-// A deferred read transaction on a read-only connection: its snapshot is
-// taken at the first read and holds until commit (or destruction).
-class ReadTransaction {
- public:
-  explicit ReadTransaction(store::sqlite::Connection& connection) : connection_(connection) {
-    connection_.exec("BEGIN");
-  }
-  ~ReadTransaction() {
-    if (open_) sqlite3_exec(connection_.handle(), "ROLLBACK", nullptr, nullptr, nullptr);
-  }
-  ReadTransaction(const ReadTransaction&) = delete;
-  ReadTransaction& operator=(const ReadTransaction&) = delete;
-  void commit() {
-    connection_.exec("COMMIT");
-    open_ = false;
-  }
-
- private:
-  store::sqlite::Connection& connection_;
-  bool open_ = true;
-};
-
 // The slot in RunData::positions of a plan index met by a pass; every pass
 // reads the snapshot the slots came from, so a miss means the file is
 // inconsistent (a row of frames without its position).
@@ -128,34 +108,311 @@ struct CornerSeries {
   stats::RunningSummary edge;
 };
 
-void flush_markers(std::map<int, CornerSeries>& series, PositionData& position) {
-  for (auto& [id, s] : series) {
-    MarkerAtPosition m;
-    m.marker_id = id;
-    m.frames_detected = s.corners.size();
-    m.edge_fit_residual_px = s.edge.summary();
-    double side = 0;
-    for (const auto& c : s.corners) {
-      for (int k = 0; k < 4; ++k) {
-        const int n = (k + 1) % 4;
-        side += std::hypot(c[2 * n] - c[2 * k], c[2 * n + 1] - c[2 * k + 1]);
-      }
+// Mean side length of the quadrilaterals A-B-C-D of a series, px.
+double mean_side_px(const std::vector<std::array<double, 8>>& corners) {
+  double side = 0;
+  for (const auto& c : corners) {
+    for (int k = 0; k < 4; ++k) {
+      const int n = (k + 1) % 4;
+      side += std::hypot(c[2 * n] - c[2 * k], c[2 * n + 1] - c[2 * k + 1]);
     }
-    m.side_px = side / (4.0 * static_cast<double>(s.corners.size()));
-    if (s.corners.size() >= 2) {
-      for (int k = 0; k < 8; ++k) {
-        double mean = 0;
-        for (const auto& c : s.corners)
-          mean += c[k];
-        mean /= static_cast<double>(s.corners.size());
-        for (const auto& c : s.corners)
-          m.corner_sum_squares += (c[k] - mean) * (c[k] - mean);
-        m.corner_dof += s.corners.size() - 1;
-      }
-    }
-    position.markers.push_back(m);
   }
+  return side / (4.0 * static_cast<double>(corners.size()));
+}
+
+// One marker's detections at one position: its frames, edge-fit residuals,
+// side and the scatter of each of its 8 corner coordinates about their mean.
+MarkerAtPosition marker_at_position(int marker_id, const CornerSeries& s) {
+  MarkerAtPosition m;
+  m.marker_id = marker_id;
+  m.frames_detected = s.corners.size();
+  m.edge_fit_residual_px = s.edge.summary();
+  m.side_px = mean_side_px(s.corners);
+  if (s.corners.size() < 2) return m;
+  for (int k = 0; k < 8; ++k) {
+    double mean = 0;
+    for (const auto& c : s.corners)
+      mean += c[k];
+    mean /= static_cast<double>(s.corners.size());
+    for (const auto& c : s.corners)
+      m.corner_sum_squares += (c[k] - mean) * (c[k] - mean);
+    m.corner_dof += s.corners.size() - 1;
+  }
+  return m;
+}
+
+void flush_markers(std::map<int, CornerSeries>& series, PositionData& position) {
+  for (const auto& [id, s] : series)
+    position.markers.push_back(marker_at_position(id, s));
   series.clear();
+}
+
+// Opens the file through the Store, read-only. Missing, not SQLite, another
+// program's, newer or older schema: input the user must fix, not a failure
+// of this program, so ReportInputError.
+store::Store open_for_report(const std::string& database) {
+  store::StoreOptions options;
+  options.read_only = true;
+  try {
+    return store::Store(database, options);
+  } catch (const store::StoreError& e) {
+    throw ReportInputError(e.what());
+  }
+}
+
+// The run's description through the Store, its mutable columns (status,
+// reason, end) from the snapshot.
+store::Run read_run(store::sqlite::Connection& connection, const store::Store& store,
+                    const std::string& database, std::int64_t id) {
+  store::sqlite::Statement state(connection,
+                                 "SELECT status, status_reason, ended_at FROM runs WHERE id = ?1");
+  state.bind(1, id);
+  state.step();
+  store::Run run = store.run(id);
+  run.status = store::run_status_from_text(database, state.get_text(0));
+  run.status_reason = state.get_text(1);
+  run.ended_at = state.get_optional_text(2);
+  return run;
+}
+
+// The snapshot's positions, by plan index, each given its slot: the Store's
+// records (a superset, positions being append-only) filtered to the plan
+// indices the snapshot holds.
+std::vector<PositionData> read_positions(store::sqlite::Connection& connection,
+                                         const store::Store& store, const std::string& database,
+                                         std::int64_t id, Slots& slots) {
+  std::vector<std::int64_t> snapshot_indices;
+  store::sqlite::Statement indices(connection,
+                                   "SELECT plan_index FROM positions WHERE run_id = ?1 "
+                                   "ORDER BY plan_index");
+  indices.bind(1, id);
+  while (indices.step())
+    snapshot_indices.push_back(indices.get_int64(0));
+  std::vector<PositionData> positions;
+  std::size_t next = 0;
+  for (store::PositionRecord& p : store.positions(id)) {
+    if (next == snapshot_indices.size() || p.plan_index != snapshot_indices[next]) continue;
+    ++next;
+    slots.add(p.plan_index, static_cast<std::uint32_t>(positions.size()));
+    PositionData pd;
+    pd.record = std::move(p);
+    positions.push_back(std::move(pd));
+  }
+  if (next != snapshot_indices.size()) {
+    throw store::StoreError(database + ": run " + std::to_string(id) + ": position at plan index " +
+                            std::to_string(snapshot_indices[next]) +
+                            " disappeared while the report read it; expected positions to be "
+                            "append-only");
+  }
+  return positions;
+}
+
+std::vector<store::RunEvent> read_events(store::sqlite::Connection& connection, std::int64_t id) {
+  std::vector<store::RunEvent> events;
+  store::sqlite::Statement select(connection,
+                                  "SELECT at, plan_index, kind, message FROM run_events "
+                                  "WHERE run_id = ?1 ORDER BY id");
+  select.bind(1, id);
+  while (select.step()) {
+    events.push_back(store::RunEvent{select.get_text(0), select.get_optional_int64(1),
+                                     select.get_text(2), select.get_text(3)});
+  }
+  return events;
+}
+
+void read_frame_counts(store::sqlite::Connection& connection, std::int64_t id, const Slots& slots,
+                       std::vector<PositionData>& positions) {
+  store::sqlite::Statement frames(connection, kFramesQuery);
+  frames.bind(1, id);
+  while (frames.step())
+    positions[slots.at(frames.get_int64(0), "frames")].frames =
+        static_cast<std::size_t>(frames.get_int64(1));
+}
+
+// The columns of kEstimatesQuery.
+namespace estimate_column {
+enum : int {
+  kPlanIndex = 0,
+  kFrameIndex = 1,
+  kSolver = 2,
+  kScope = 3,
+  kRotation = 4,  // r00 .. r22, row-major: columns 4 .. 12
+  kDistance = 13,
+  kReprojection = 14,
+  kGeneralization = 15,
+  kConverged = 16,
+  kTermination = 17,
+  kTime = 18,
+  kAmbiguity = 19,
+};
+}  // namespace estimate_column
+
+// The columns of kDetectionsQuery.
+namespace detection_column {
+enum : int {
+  kPlanIndex = 0,
+  kMarkerId = 2,
+  kCorners = 3,  // a_x, a_y, b_x, ..., d_y: columns 3 .. 10
+  kEdgeFitResidual = 11,
+};
+}  // namespace detection_column
+
+// One row's numbers; absent or non-finite optional figures are NaN (the
+// status is set by status_of).
+EstimateSample sample_of(const store::sqlite::Statement& row, std::uint32_t slot) {
+  EstimateSample s;
+  s.position = slot;
+  s.distance_m = row.get_double(estimate_column::kDistance);
+  s.reprojection_px = row.get_double(estimate_column::kReprojection);
+  if (!row.is_null(estimate_column::kGeneralization))
+    s.generalization_px = row.get_double(estimate_column::kGeneralization);
+  s.time_us = row.get_double(estimate_column::kTime);
+  if (!row.is_null(estimate_column::kAmbiguity))
+    s.ambiguity_ratio = row.get_double(estimate_column::kAmbiguity);
+  if (!std::isfinite(s.generalization_px)) s.generalization_px = kNaN;
+  if (!std::isfinite(s.time_us)) s.time_us = kNaN;
+  if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
+  return s;
+}
+
+// Converged, skipped (solver not applicable) or failed; a failure is counted
+// under its termination. A converged estimate must have a finite distance
+// and reprojection error; one that does not is a solver bug, counted as a
+// failure under its own name rather than poisoning every mean of the report.
+SampleStatus status_of(const store::sqlite::Statement& row, const EstimateSample& s,
+                       std::map<std::string, std::size_t>& failures_by_termination) {
+  if (row.get_int(estimate_column::kConverged) != 0) {
+    if (std::isfinite(s.distance_m) && std::isfinite(s.reprojection_px)) {
+      return SampleStatus::kConverged;
+    }
+    ++failures_by_termination["converged with a non-finite value"];
+    return SampleStatus::kFailed;
+  }
+  const std::string termination = row.get_text(estimate_column::kTermination);
+  if (is_skipped(termination)) return SampleStatus::kSkipped;
+  ++failures_by_termination[termination];
+  return SampleStatus::kFailed;
+}
+
+// The state of the pass over the estimates: the solver x scope data in order
+// of first appearance, and the converged rotations of the current frame by
+// solver, whose pairs become the flip samples.
+class EstimatesPass {
+ public:
+  EstimatesPass(const Slots& slots, RunData& data) : slots_(slots), data_(data) {}
+
+  // Moves to the frame of a row (rows come by plan index, then frame index).
+  void enter_frame(std::int64_t plan, std::int64_t frame) {
+    if (plan == plan_ && frame == frame_) return;
+    flush_frame();
+    if (plan != plan_) slot_ = slots_.at(plan, "estimates");
+    plan_ = plan;
+    frame_ = frame;
+  }
+  std::uint32_t slot() const { return slot_; }
+
+  SolverScopeData& data_of(const std::string& solver, const std::string& scope) {
+    auto [it, inserted] = key_index_.try_emplace({solver, scope}, solvers_.size());
+    if (inserted) solvers_.push_back(SolverScopeData{solver, scope, {}, {}});
+    return solvers_[it->second];
+  }
+
+  // A converged estimate's rotation: [0] the pose marker's scope (a marker
+  // id, "0" by default), [1] "target".
+  void keep_rotation(const store::sqlite::Statement& row, const std::string& solver,
+                     const std::string& scope) {
+    const int which = scope == "target" ? 1 : 0;
+    FrameRotations& fr = frame_rotations_[solver];
+    fr.has[which] = true;
+    for (int k = 0; k < 9; ++k)
+      fr.R[which][k] = row.get_double(estimate_column::kRotation + k);
+  }
+
+  // After the last row: the last frame's flips, and the solvers sorted by
+  // solver, then scope.
+  void finish() {
+    flush_frame();
+    for (const auto& [key, index] : key_index_)
+      data_.solvers.push_back(std::move(solvers_[index]));
+  }
+
+ private:
+  struct FrameRotations {
+    bool has[2] = {false, false};
+    std::array<double, 9> R[2];
+  };
+
+  void flush_frame() {
+    for (auto& [solver, fr] : frame_rotations_) {
+      if (fr.has[0] && fr.has[1]) {
+        data_.flips[solver].push_back({slot_, rotation_angle_deg(fr.R[0], fr.R[1])});
+      }
+      fr.has[0] = fr.has[1] = false;
+    }
+  }
+
+  const Slots& slots_;
+  RunData& data_;
+  std::map<std::pair<std::string, std::string>, std::size_t> key_index_;
+  std::vector<SolverScopeData> solvers_;
+  std::map<std::string, FrameRotations> frame_rotations_;
+  std::int64_t plan_ = -1;
+  std::int64_t frame_ = -1;
+  std::uint32_t slot_ = 0;
+};
+
+void read_estimates(store::sqlite::Connection& connection, std::int64_t id, const Slots& slots,
+                    RunData& data) {
+  EstimatesPass pass(slots, data);
+  store::sqlite::Statement select(connection, kEstimatesQuery);
+  select.bind(1, id);
+  std::string solver, scope;
+  while (select.step()) {
+    pass.enter_frame(select.get_int64(estimate_column::kPlanIndex),
+                     select.get_int64(estimate_column::kFrameIndex));
+    solver = select.get_text(estimate_column::kSolver);
+    scope = select.get_text(estimate_column::kScope);
+    SolverScopeData& target = pass.data_of(solver, scope);
+    EstimateSample s = sample_of(select, pass.slot());
+    s.status = status_of(select, s, target.failures_by_termination);
+    if (s.status == SampleStatus::kConverged) pass.keep_rotation(select, solver, scope);
+    target.samples.push_back(s);
+  }
+  pass.finish();
+}
+
+// Detections with a non-finite corner or edge-fit residual are counted in
+// data.nonfinite_detections and left out.
+void read_detections(store::sqlite::Connection& connection, std::int64_t id, const Slots& slots,
+                     RunData& data) {
+  store::sqlite::Statement select(connection, kDetectionsQuery);
+  select.bind(1, id);
+  std::map<int, CornerSeries> series;
+  std::int64_t current_plan = -1;
+  while (select.step()) {
+    const std::int64_t plan = select.get_int64(detection_column::kPlanIndex);
+    if (plan != current_plan) {
+      if (current_plan >= 0)
+        flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
+      current_plan = plan;
+    }
+    std::array<double, 8> c;
+    bool finite = true;
+    for (int k = 0; k < 8; ++k) {
+      c[k] = select.get_double(detection_column::kCorners + k);
+      finite = finite && std::isfinite(c[k]);
+    }
+    const double edge = select.get_double(detection_column::kEdgeFitResidual);
+    if (!finite || !std::isfinite(edge)) {
+      ++data.nonfinite_detections;
+      continue;
+    }
+    CornerSeries& s = series[select.get_int(detection_column::kMarkerId)];
+    s.corners.push_back(c);
+    s.edge.add(edge);
+  }
+  if (current_plan >= 0)
+    flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
 }
 
 }  // namespace
@@ -163,17 +420,7 @@ void flush_markers(std::map<int, CornerSeries>& series, PositionData& position) 
 RunData load_run(const std::string& database, std::optional<std::int64_t> run_id) {
   RunData data;
   data.database = database;
-  store::StoreOptions options;
-  options.read_only = true;
-  std::optional<store::Store> store;
-  try {
-    store.emplace(database, options);
-  } catch (const store::StoreError& e) {
-    // Missing, not SQLite, another program's, newer or older schema: input
-    // the user must fix, not a failure of this program.
-    throw ReportInputError(e.what());
-  }
-
+  std::optional<store::Store> store(open_for_report(database));
   // One snapshot: every read of the run's rows is made in one read
   // transaction of this connection, so a sweep resumed or appending while
   // the report reads cannot make the passes disagree. The run's description
@@ -185,176 +432,16 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   // the snapshot.
   store::sqlite::Connection connection(database, SQLITE_OPEN_READONLY);
   connection.exec("PRAGMA query_only = ON");
-  ReadTransaction transaction(connection);
+  store::sqlite::Transaction transaction(connection, store::sqlite::Transaction::Kind::kRead);
   const std::int64_t id = pick_run(connection, database, run_id);
-  {
-    store::sqlite::Statement state(
-        connection, "SELECT status, status_reason, ended_at FROM runs WHERE id = ?1");
-    state.bind(1, id);
-    state.step();
-    data.run = store->run(id);
-    data.run.status = store::run_status_from_text(database, state.get_text(0));
-    data.run.status_reason = state.get_text(1);
-    data.run.ended_at = state.get_optional_text(2);
-  }
+  data.run = read_run(connection, *store, database, id);
   Slots slots(database, id);
-  {
-    std::vector<std::int64_t> snapshot_indices;
-    store::sqlite::Statement indices(connection,
-                                     "SELECT plan_index FROM positions WHERE run_id = ?1 "
-                                     "ORDER BY plan_index");
-    indices.bind(1, id);
-    while (indices.step())
-      snapshot_indices.push_back(indices.get_int64(0));
-    std::size_t next = 0;
-    for (store::PositionRecord& p : store->positions(id)) {
-      if (next == snapshot_indices.size() || p.plan_index != snapshot_indices[next]) continue;
-      ++next;
-      slots.add(p.plan_index, static_cast<std::uint32_t>(data.positions.size()));
-      PositionData pd;
-      pd.record = std::move(p);
-      data.positions.push_back(std::move(pd));
-    }
-    if (next != snapshot_indices.size()) {
-      throw store::StoreError(database + ": run " + std::to_string(id) +
-                              ": position at plan index " + std::to_string(snapshot_indices[next]) +
-                              " disappeared while the report read it; expected positions to be "
-                              "append-only");
-    }
-  }
+  data.positions = read_positions(connection, *store, database, id, slots);
   store.reset();
-  {
-    store::sqlite::Statement events(connection,
-                                    "SELECT at, plan_index, kind, message FROM run_events "
-                                    "WHERE run_id = ?1 ORDER BY id");
-    events.bind(1, id);
-    while (events.step()) {
-      data.events.push_back(store::RunEvent{events.get_text(0), events.get_optional_int64(1),
-                                            events.get_text(2), events.get_text(3)});
-    }
-  }
-
-  {
-    store::sqlite::Statement frames(connection, kFramesQuery);
-    frames.bind(1, id);
-    while (frames.step())
-      data.positions[slots.at(frames.get_int64(0), "frames")].frames =
-          static_cast<std::size_t>(frames.get_int64(1));
-  }
-
-  {
-    std::map<std::pair<std::string, std::string>, std::size_t> key_index;
-    std::vector<SolverScopeData> solvers;
-    // Rotations of the current frame by solver: [0] the pose marker's scope
-    // (a marker id, "0" by default), [1] "target".
-    struct FrameRotations {
-      bool has[2] = {false, false};
-      std::array<double, 9> R[2];
-    };
-    std::map<std::string, FrameRotations> frame_rotations;
-    std::int64_t current_plan = -1;
-    std::int64_t current_frame = -1;
-    std::uint32_t current_slot = 0;
-    auto flush_frame = [&] {
-      for (auto& [solver, fr] : frame_rotations) {
-        if (fr.has[0] && fr.has[1]) {
-          data.flips[solver].push_back({current_slot, rotation_angle_deg(fr.R[0], fr.R[1])});
-        }
-        fr.has[0] = fr.has[1] = false;
-      }
-    };
-
-    store::sqlite::Statement select(connection, kEstimatesQuery);
-    select.bind(1, id);
-    std::string solver, scope;
-    while (select.step()) {
-      const std::int64_t plan = select.get_int64(0);
-      const std::int64_t frame = select.get_int64(1);
-      if (plan != current_plan || frame != current_frame) {
-        flush_frame();
-        if (plan != current_plan) current_slot = slots.at(plan, "estimates");
-        current_plan = plan;
-        current_frame = frame;
-      }
-      solver = select.get_text(2);
-      scope = select.get_text(3);
-      auto [it, inserted] = key_index.try_emplace({solver, scope}, solvers.size());
-      if (inserted) solvers.push_back(SolverScopeData{solver, scope, {}, {}});
-      SolverScopeData& target = solvers[it->second];
-
-      EstimateSample s;
-      s.position = current_slot;
-      s.distance_m = select.get_double(13);
-      s.reprojection_px = select.get_double(14);
-      if (!select.is_null(15)) s.generalization_px = select.get_double(15);
-      s.time_us = select.get_double(18);
-      if (!select.is_null(19)) s.ambiguity_ratio = select.get_double(19);
-      // A converged estimate must have a finite distance and reprojection
-      // error; one that does not is a solver bug, counted as a failure under
-      // its own name rather than poisoning every mean of the report.
-      const bool finite = std::isfinite(s.distance_m) && std::isfinite(s.reprojection_px);
-      const bool converged = select.get_int(16) != 0 && finite;
-      if (!std::isfinite(s.generalization_px)) s.generalization_px = kNaN;
-      if (!std::isfinite(s.time_us)) s.time_us = kNaN;
-      if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
-      if (select.get_int(16) != 0 && !finite) {
-        s.status = SampleStatus::kFailed;
-        ++target.failures_by_termination["converged with a non-finite value"];
-      } else if (converged) {
-        s.status = SampleStatus::kConverged;
-        const int which = scope == "target" ? 1 : 0;
-        {
-          FrameRotations& fr = frame_rotations[solver];
-          fr.has[which] = true;
-          for (int k = 0; k < 9; ++k)
-            fr.R[which][k] = select.get_double(4 + k);
-        }
-      } else {
-        const std::string termination = select.get_text(17);
-        if (is_skipped(termination)) {
-          s.status = SampleStatus::kSkipped;
-        } else {
-          s.status = SampleStatus::kFailed;
-          ++target.failures_by_termination[termination];
-        }
-      }
-      target.samples.push_back(s);
-    }
-    flush_frame();
-    for (const auto& [key, index] : key_index)
-      data.solvers.push_back(std::move(solvers[index]));  // map order: by solver, then scope
-  }
-
-  {
-    store::sqlite::Statement select(connection, kDetectionsQuery);
-    select.bind(1, id);
-    std::map<int, CornerSeries> series;
-    std::int64_t current_plan = -1;
-    while (select.step()) {
-      const std::int64_t plan = select.get_int64(0);
-      if (plan != current_plan) {
-        if (current_plan >= 0)
-          flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
-        current_plan = plan;
-      }
-      std::array<double, 8> c;
-      bool finite = true;
-      for (int k = 0; k < 8; ++k) {
-        c[k] = select.get_double(3 + k);
-        finite = finite && std::isfinite(c[k]);
-      }
-      const double edge = select.get_double(11);
-      if (!finite || !std::isfinite(edge)) {
-        ++data.nonfinite_detections;
-        continue;
-      }
-      CornerSeries& s = series[select.get_int(2)];
-      s.corners.push_back(c);
-      s.edge.add(edge);
-    }
-    if (current_plan >= 0)
-      flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
-  }
+  data.events = read_events(connection, id);
+  read_frame_counts(connection, id, slots, data.positions);
+  read_estimates(connection, id, slots, data);
+  read_detections(connection, id, slots, data);
   transaction.commit();
   return data;
 }

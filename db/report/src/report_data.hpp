@@ -3,12 +3,11 @@
 // database in a few indexed passes (private to db_report).
 //
 // Query plans (checked by ReportQueries.UseTheIndexesAndScanNoTable in
-// tests/db/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass starts from positions
-// (run_id, plan_index), reaches frames through (position_id, frame_index) and estimates or
-// detections through their frame_id indexes, so no pass scans a whole table of a file holding many
+// tests/db/report/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass
+// starts from positions (run_id, plan_index), reaches frames through
+// (position_id, frame_index) and estimates or detections through their
+// frame_id indexes, so no pass scans a whole table of a file holding many
 // runs.
-#include <array>
-#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <map>
@@ -88,8 +87,5 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
 extern const char* const kEstimatesQuery;
 extern const char* const kDetectionsQuery;
 extern const char* const kFramesQuery;
-
-// Rotation angle of R_a^T R_b for row-major rotations, degrees, in [0, 180].
-double rotation_angle_deg(const std::array<double, 9>& R_a, const std::array<double, 9>& R_b);
 
 }  // namespace db::report

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <functional>
 
+#include "report_data.hpp"
 #include "report_document.hpp"
-#include "report_study.hpp"
 
 namespace db::report {
 namespace {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include "db/stats/eiv.hpp"
 #include "db/stats/error.hpp"
@@ -35,13 +36,44 @@ struct Pooled {
     sum_squares += s.variance * static_cast<double>(s.count - 1);
     dof += static_cast<double>(s.count - 1);
   }
+  // A marker's corner coordinates over the frames of its position.
+  void add_corners(const MarkerAtPosition& m) {
+    sum_squares += m.corner_sum_squares;
+    dof += static_cast<double>(m.corner_dof);
+  }
   double variance() const { return dof > 0 ? sum_squares / dof : kNaN; }
   double sd() const { return std::sqrt(variance()); }
+};
+
+// One empty class per bin, with the bin's edges.
+template <class Class>
+std::vector<Class> empty_classes(const stats::EqualWidthBins& bins, double Class::*lower,
+                                 double Class::*upper) {
+  std::vector<Class> out(bins.count());
+  for (std::size_t i = 0; i < bins.count(); ++i) {
+    out[i].*lower = bins.edge(i);
+    out[i].*upper = bins.edge(i + 1);
+  }
+  return out;
+}
+
+// The distance and viewing-angle classes a position falls in (nullopt:
+// unknown or outside the classes).
+struct PositionClasses {
+  stats::EqualWidthBins distance = distance_classes();
+  stats::EqualWidthBins angle = viewing_angle_classes();
+  std::pair<std::optional<std::size_t>, std::optional<std::size_t>> of(
+      const store::PositionRecord& p) const {
+    return std::make_pair(
+        p.true_distance_m ? distance_class(distance, *p.true_distance_m) : std::nullopt,
+        p.true_viewing_angle_deg ? angle.index_of(*p.true_viewing_angle_deg) : std::nullopt);
+  }
 };
 
 // One position's used estimates of one solver and scope.
 struct PositionGroup {
   std::uint32_t position = 0;
+  std::optional<std::size_t> distance_class;
   stats::RunningSummary distance, abs_error, reprojection, generalization;
 };
 
@@ -52,6 +84,19 @@ struct ClassAccumulator {
   double bound_sum_squares = 0;  // sum (n_p - 1) sigma^2 b_p^2
   double bound_dof = 0;          // dof of the positions that have a bound
   double jitter_with_bound = 0;  // sum (n_p - 1) s_p^2 over those positions
+};
+
+// Everything one solver and scope accumulates over its estimates.
+struct SolverAccumulator {
+  stats::RunningSummary reprojection, generalization, error, abs_error, relative, time;
+  std::vector<ClassAccumulator> classes = std::vector<ClassAccumulator>(distance_classes().count());
+  std::vector<double> x, y;           // true and estimated distance of every used estimate, m
+  std::vector<PositionGroup> groups;  // the positions with used estimates, by plan index
+  // Over positions: each one's mean |error|, reprojection and generalization
+  // error; and the spread of the distance within a position, pooled (the
+  // y error of the Deming fit).
+  stats::RunningSummary position_abs, position_reprojection, position_generalization;
+  Pooled jitter;
 };
 
 std::optional<double> bound_of(const store::PositionRecord& p, const std::string& scope) {
@@ -80,15 +125,14 @@ std::vector<ClassCornerNoise> corner_noise_by_class(const RunData& data) {
     if (!p.record.true_distance_m) continue;
     const auto c = distance_class(bins, *p.record.true_distance_m);
     if (!c) continue;
-    for (const MarkerAtPosition& m : p.markers) {
-      pooled[*c].sum_squares += m.corner_sum_squares;
-      pooled[*c].dof += static_cast<double>(m.corner_dof);
-    }
+    for (const MarkerAtPosition& m : p.markers)
+      pooled[*c].add_corners(m);
   }
-  std::vector<ClassCornerNoise> out;
+  std::vector<ClassCornerNoise> out =
+      empty_classes(bins, &ClassCornerNoise::lower_m, &ClassCornerNoise::upper_m);
   for (std::size_t i = 0; i < bins.count(); ++i) {
-    out.push_back(
-        {bins.edge(i), bins.edge(i + 1), pooled[i].sd(), static_cast<std::size_t>(pooled[i].dof)});
+    out[i].sigma_px = pooled[i].sd();
+    out[i].dof = static_cast<std::size_t>(pooled[i].dof);
   }
   return out;
 }
@@ -117,50 +161,65 @@ void fit_lines(const std::vector<double>& x, const std::vector<double>& y, doubl
   }
 }
 
-SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
-                         const std::vector<ClassCornerNoise>& corner_noise,
-                         const ReportOptions& options) {
-  const stats::EqualWidthBins bins = distance_classes();
-  const stats::EqualWidthBins angles = viewing_angle_classes();
+// The study's name, counts and empty classes, before any estimate is added.
+SolverStudy empty_study(const SolverScopeData& rows, const PositionClasses& classes) {
   SolverStudy s;
   s.solver = rows.solver;
   s.scope = rows.scope;
   s.estimates = rows.samples.size();
   s.failures_by_termination = rows.failures_by_termination;
-  for (std::size_t i = 0; i < bins.count(); ++i) {
-    DistanceClassStudy c;
-    c.lower_m = bins.edge(i);
-    c.upper_m = bins.edge(i + 1);
-    s.classes.push_back(c);
-  }
-  for (std::size_t i = 0; i < angles.count(); ++i) {
-    AngleClassStudy a;
-    a.lower_deg = angles.edge(i);
-    a.upper_deg = angles.edge(i + 1);
-    s.by_viewing_angle.push_back(a);
-  }
-  auto classes_of = [&](std::uint32_t position) {
-    const store::PositionRecord& p = data.positions[position].record;
-    return std::make_pair(
-        p.true_distance_m ? distance_class(bins, *p.true_distance_m) : std::nullopt,
-        p.true_viewing_angle_deg ? angles.index_of(*p.true_viewing_angle_deg) : std::nullopt);
-  };
+  s.classes =
+      empty_classes(classes.distance, &DistanceClassStudy::lower_m, &DistanceClassStudy::upper_m);
+  s.by_viewing_angle =
+      empty_classes(classes.angle, &AngleClassStudy::lower_deg, &AngleClassStudy::upper_deg);
+  return s;
+}
 
-  stats::RunningSummary reprojection, generalization, error, abs_error, relative, time;
-  std::vector<ClassAccumulator> acc(bins.count());
-  std::vector<double> x, y;
-  std::vector<PositionGroup> groups;
+// A converged estimate with a known true distance: into the whole-run
+// figures, the fit's points, its position's group and its distance class.
+void add_used_estimate(const EstimateSample& e, double truth,
+                       std::optional<std::size_t> distance_class, SolverAccumulator& acc) {
+  const double err = e.distance_m - truth;
+  const bool has_generalization = !std::isnan(e.generalization_px);
+  acc.reprojection.add(e.reprojection_px);
+  if (has_generalization) acc.generalization.add(e.generalization_px);
+  acc.error.add(err);
+  acc.abs_error.add(std::fabs(err));
+  acc.relative.add(100.0 * std::fabs(err) / truth);
+  acc.x.push_back(truth);
+  acc.y.push_back(e.distance_m);
+  if (acc.groups.empty() || acc.groups.back().position != e.position) {
+    acc.groups.push_back(PositionGroup{e.position, distance_class, {}, {}, {}, {}});
+  }
+  PositionGroup& g = acc.groups.back();
+  g.distance.add(e.distance_m);
+  g.abs_error.add(std::fabs(err));
+  g.reprojection.add(e.reprojection_px);
+  if (has_generalization) g.generalization.add(e.generalization_px);
+  if (distance_class) {
+    ClassAccumulator& a = acc.classes[*distance_class];
+    a.error.add(err);
+    a.reprojection.add(e.reprojection_px);
+    if (has_generalization) a.generalization.add(e.generalization_px);
+  }
+}
+
+// Every estimate of the solver and scope: skipped, failed and used counts,
+// times, ambiguity, and the used estimates' accumulators.
+void add_estimates(const RunData& data, const SolverScopeData& rows, const PositionClasses& classes,
+                   const ReportOptions& options, SolverStudy& s, SolverAccumulator& acc) {
   for (const EstimateSample& e : rows.samples) {
     if (e.status == SampleStatus::kSkipped) {
       ++s.skipped;
       continue;
     }
-    if (!std::isnan(e.time_us)) time.add(e.time_us);
-    const auto [distance_class, angle_class] = classes_of(e.position);
+    if (!std::isnan(e.time_us)) acc.time.add(e.time_us);
     if (e.status == SampleStatus::kFailed) {
       ++s.failed;
       continue;
     }
+    const store::PositionRecord& p = data.positions[e.position].record;
+    const auto [distance_class, angle_class] = classes.of(p);
     // Ambiguity of converged estimates only: a failed estimate's ratio
     // compares two solutions that did not converge.
     if (!std::isnan(e.ambiguity_ratio)) {
@@ -169,77 +228,64 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
       if (distance_class) count_ambiguity(s.classes[*distance_class], ambiguous);
       if (angle_class) count_ambiguity(s.by_viewing_angle[*angle_class], ambiguous);
     }
-    const store::PositionRecord& p = data.positions[e.position].record;
     // An unknown (or impossible) true distance: the estimate converged but
     // there is nothing to compare it with.
     if (!p.true_distance_m || !std::isfinite(*p.true_distance_m) || *p.true_distance_m <= 0) {
       continue;
     }
     ++s.used;
-    const double truth = *p.true_distance_m;
-    const double err = e.distance_m - truth;
-    const bool has_generalization = !std::isnan(e.generalization_px);
-    reprojection.add(e.reprojection_px);
-    if (has_generalization) generalization.add(e.generalization_px);
-    error.add(err);
-    abs_error.add(std::fabs(err));
-    relative.add(100.0 * std::fabs(err) / truth);
-    x.push_back(truth);
-    y.push_back(e.distance_m);
-    if (groups.empty() || groups.back().position != e.position) {
-      groups.push_back(PositionGroup{e.position, {}, {}, {}, {}});
-    }
-    PositionGroup& g = groups.back();
-    g.distance.add(e.distance_m);
-    g.abs_error.add(std::fabs(err));
-    g.reprojection.add(e.reprojection_px);
-    if (has_generalization) g.generalization.add(e.generalization_px);
-    if (distance_class) {
-      ClassAccumulator& a = acc[*distance_class];
-      a.error.add(err);
-      a.reprojection.add(e.reprojection_px);
-      if (has_generalization) a.generalization.add(e.generalization_px);
-    }
+    add_used_estimate(e, *p.true_distance_m, distance_class, acc);
   }
+}
 
-  // Per position: jitter, bias, efficiency, the per-position means run
-  // comparison tests, and the points of Fig. 12.
-  Pooled jitter_all;
-  stats::RunningSummary position_abs, position_reprojection, position_generalization;
+// One position's distances d (its used estimates, m) into its class: bias,
+// jitter and, where the position has a Cramér-Rao bound (m/px) and the class
+// a corner noise (px), the efficiency sums.
+void add_position_to_class(const stats::Summary& d, double truth, std::optional<double> bound,
+                           double sigma_px, ClassAccumulator& a) {
+  a.bias.add(d.mean - truth);
+  a.jitter.add(d);
+  if (bound && d.count >= 2 && std::isfinite(sigma_px)) {
+    const double n1 = static_cast<double>(d.count - 1);
+    a.bound_sum_squares += n1 * sigma_px * sigma_px * *bound * *bound;
+    a.bound_dof += n1;
+    a.jitter_with_bound += n1 * d.variance;
+  }
+}
+
+// Per position: jitter, bias, efficiency, the per-position means run
+// comparison tests, and the points of Fig. 12 (every stride-th position).
+void add_positions(const RunData& data, const std::vector<ClassCornerNoise>& corner_noise,
+                   const ReportOptions& options, SolverStudy& s, SolverAccumulator& acc) {
   const std::size_t stride =
-      std::max<std::size_t>(1, (groups.size() + options.max_points_per_series - 1) /
+      std::max<std::size_t>(1, (acc.groups.size() + options.max_points_per_series - 1) /
                                    std::max<std::size_t>(1, options.max_points_per_series));
-  for (std::size_t i = 0; i < groups.size(); ++i) {
-    const PositionGroup& g = groups[i];
+  for (std::size_t i = 0; i < acc.groups.size(); ++i) {
+    const PositionGroup& g = acc.groups[i];
     const store::PositionRecord& p = data.positions[g.position].record;
     const stats::Summary d = g.distance.summary();
-    position_abs.add(g.abs_error.summary().mean);
-    position_reprojection.add(g.reprojection.summary().mean);
+    acc.position_abs.add(g.abs_error.summary().mean);
+    acc.position_reprojection.add(g.reprojection.summary().mean);
     const stats::Summary gen = g.generalization.summary();
-    if (gen.count > 0) position_generalization.add(gen.mean);
+    if (gen.count > 0) acc.position_generalization.add(gen.mean);
     s.per_position.push_back({p.plan_index, g.abs_error.summary().mean,
                               g.reprojection.summary().mean, gen.count > 0 ? gen.mean : kNaN});
-    jitter_all.add(d);
+    acc.jitter.add(d);
     if (i % stride == 0) {
       s.plot_true_m.push_back(*p.true_distance_m);
       s.plot_estimated_m.push_back(d.mean);
     }
-    const auto c = distance_class(bins, *p.true_distance_m);
-    if (!c) continue;
-    ClassAccumulator& a = acc[*c];
-    a.bias.add(d.mean - *p.true_distance_m);
-    a.jitter.add(d);
-    const auto bound = bound_of(p, s.scope);
-    const double sigma = corner_noise[*c].sigma_px;
-    if (bound && d.count >= 2 && std::isfinite(sigma)) {
-      const double n1 = static_cast<double>(d.count - 1);
-      a.bound_sum_squares += n1 * sigma * sigma * *bound * *bound;
-      a.bound_dof += n1;
-      a.jitter_with_bound += n1 * d.variance;
-    }
+    if (!g.distance_class) continue;
+    const std::size_t c = *g.distance_class;
+    add_position_to_class(d, *p.true_distance_m, bound_of(p, s.scope), corner_noise[c].sigma_px,
+                          acc.classes[c]);
   }
-  for (std::size_t i = 0; i < bins.count(); ++i) {
-    DistanceClassStudy& c = s.classes[i];
+}
+
+void finish_classes(const std::vector<ClassAccumulator>& acc,
+                    std::vector<DistanceClassStudy>& classes) {
+  for (std::size_t i = 0; i < classes.size(); ++i) {
+    DistanceClassStudy& c = classes[i];
     const ClassAccumulator& a = acc[i];
     c.error_m = a.error.summary();
     c.reprojection_px = a.reprojection.summary();
@@ -251,31 +297,44 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
     c.jitter_m = a.jitter.sd();
     c.efficiency = a.bound_sum_squares > 0 ? a.jitter_with_bound / a.bound_sum_squares : kNaN;
   }
+}
 
-  // Flips: the pose marker's rotation against the whole target's, per frame.
-  if (s.scope != "target") {
-    const auto it = data.flips.find(s.solver);
-    if (it != data.flips.end()) {
-      for (const FlipSample& f : it->second) {
-        const bool flip = f.angle_deg > options.flip_angle_deg;
-        const auto [distance_class, angle_class] = classes_of(f.position);
-        count_flip(s, flip);
-        if (distance_class) count_flip(s.classes[*distance_class], flip);
-        if (angle_class) count_flip(s.by_viewing_angle[*angle_class], flip);
-      }
-    }
+// Flips: the pose marker's rotation against the whole target's, per frame
+// (counted on the pose marker's scope only).
+void count_flips(const RunData& data, const PositionClasses& classes, const ReportOptions& options,
+                 SolverStudy& s) {
+  if (s.scope == "target") return;
+  const auto it = data.flips.find(s.solver);
+  if (it == data.flips.end()) return;
+  for (const FlipSample& f : it->second) {
+    const bool flip = f.angle_deg > options.flip_angle_deg;
+    const auto [distance_class, angle_class] = classes.of(data.positions[f.position].record);
+    count_flip(s, flip);
+    if (distance_class) count_flip(s.classes[*distance_class], flip);
+    if (angle_class) count_flip(s.by_viewing_angle[*angle_class], flip);
   }
+}
 
-  s.reprojection_px = reprojection.summary();
-  s.generalization_px = generalization.summary();
-  s.error_m = error.summary();
-  s.abs_error_m = abs_error.summary();
-  s.relative_error_pct = relative.summary();
-  s.time_us = time.summary();
-  s.position_abs_error_m = position_abs.summary();
-  s.position_reprojection_px = position_reprojection.summary();
-  s.position_generalization_px = position_generalization.summary();
-  fit_lines(x, y, jitter_all.sd(), options, s);
+SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
+                         const std::vector<ClassCornerNoise>& corner_noise,
+                         const ReportOptions& options) {
+  const PositionClasses classes;
+  SolverStudy s = empty_study(rows, classes);
+  SolverAccumulator acc;
+  add_estimates(data, rows, classes, options, s, acc);
+  add_positions(data, corner_noise, options, s, acc);
+  finish_classes(acc.classes, s.classes);
+  count_flips(data, classes, options, s);
+  s.reprojection_px = acc.reprojection.summary();
+  s.generalization_px = acc.generalization.summary();
+  s.error_m = acc.error.summary();
+  s.abs_error_m = acc.abs_error.summary();
+  s.relative_error_pct = acc.relative.summary();
+  s.time_us = acc.time.summary();
+  s.position_abs_error_m = acc.position_abs.summary();
+  s.position_reprojection_px = acc.position_reprojection.summary();
+  s.position_generalization_px = acc.position_generalization.summary();
+  fit_lines(acc.x, acc.y, acc.jitter.sd(), options, s);
   return s;
 }
 
@@ -299,31 +358,34 @@ std::vector<StageStudy> study_stages(const RunData& data) {
   return out;
 }
 
-// Detection rate and corner quality against the marker's side length in px.
+// A marker that was visible (or, without visible markers recorded, detected)
+// at a position: its side, the frames it was expected in, and its detections
+// there (nullptr: none).
+struct MarkerSizeItem {
+  double side_px;
+  std::size_t expected;
+  const MarkerAtPosition* detected;
+};
+
+const MarkerAtPosition* detected_marker(const PositionData& p, int marker_id) {
+  for (const MarkerAtPosition& m : p.markers)
+    if (m.marker_id == marker_id) return &m;
+  return nullptr;
+}
+
 // Visible markers with a non-finite side are left out and counted in
 // nonfinite_sides.
-std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visible_recorded,
-                                                std::size_t& nonfinite_sides) {
-  // (side px, expected frames, marker at position or nullptr)
-  struct Item {
-    double side_px;
-    std::size_t expected;
-    const MarkerAtPosition* detected;
-  };
-  std::vector<Item> items;
+std::vector<MarkerSizeItem> marker_size_items(const RunData& data, bool visible_recorded,
+                                              std::size_t& nonfinite_sides) {
+  std::vector<MarkerSizeItem> items;
   for (const PositionData& p : data.positions) {
-    auto find = [&](int id) -> const MarkerAtPosition* {
-      for (const MarkerAtPosition& m : p.markers)
-        if (m.marker_id == id) return &m;
-      return nullptr;
-    };
     if (visible_recorded) {
       for (const store::VisibleMarker& v : p.record.visible_markers) {
         if (!std::isfinite(v.side_px)) {
           ++nonfinite_sides;
           continue;
         }
-        items.push_back({v.side_px, p.frames, find(v.marker_id)});
+        items.push_back({v.side_px, p.frames, detected_marker(p, v.marker_id)});
       }
     } else {
       for (const MarkerAtPosition& m : p.markers) {
@@ -331,23 +393,36 @@ std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visibl
       }
     }
   }
-  if (items.empty()) return {};
+  return items;
+}
+
+// Ten classes over the sides of the items, widened to whole pixels.
+// Precondition: items is not empty.
+stats::EqualWidthBins side_classes(const std::vector<MarkerSizeItem>& items) {
   double lo = items.front().side_px, hi = lo;
-  for (const Item& i : items) {
+  for (const MarkerSizeItem& i : items) {
     lo = std::min(lo, i.side_px);
     hi = std::max(hi, i.side_px);
   }
   lo = std::floor(lo);
   hi = std::max(std::ceil(hi), lo + 1.0);
-  const stats::EqualWidthBins bins(lo, hi, 10);
-  std::vector<MarkerSizeClass> out(bins.count());
+  return stats::EqualWidthBins(lo, hi, 10);
+}
+
+// Detection rate and corner quality against the marker's side length in px.
+// Visible markers with a non-finite side are left out and counted in
+// nonfinite_sides.
+std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visible_recorded,
+                                                std::size_t& nonfinite_sides) {
+  const std::vector<MarkerSizeItem> items =
+      marker_size_items(data, visible_recorded, nonfinite_sides);
+  if (items.empty()) return {};
+  const stats::EqualWidthBins bins = side_classes(items);
+  std::vector<MarkerSizeClass> out =
+      empty_classes(bins, &MarkerSizeClass::lower_px, &MarkerSizeClass::upper_px);
   std::vector<stats::RunningSummary> edge(bins.count());
   std::vector<Pooled> jitter(bins.count());
-  for (std::size_t i = 0; i < bins.count(); ++i) {
-    out[i].lower_px = bins.edge(i);
-    out[i].upper_px = bins.edge(i + 1);
-  }
-  for (const Item& i : items) {
+  for (const MarkerSizeItem& i : items) {
     const auto c = bins.index_of(i.side_px);
     if (!c) continue;
     out[*c].expected += i.expected;
@@ -356,14 +431,30 @@ std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visibl
                                  visible_recorded ? i.expected : i.detected->frames_detected);
     if (i.detected->edge_fit_residual_px.count > 0)
       edge[*c].add(i.detected->edge_fit_residual_px.mean);
-    jitter[*c].sum_squares += i.detected->corner_sum_squares;
-    jitter[*c].dof += static_cast<double>(i.detected->corner_dof);
+    jitter[*c].add_corners(*i.detected);
   }
   for (std::size_t i = 0; i < bins.count(); ++i) {
     out[i].edge_fit_residual_px = edge[i].summary();
     out[i].corner_jitter_px = jitter[i].sd();
   }
   return out;
+}
+
+// The run's counts of positions and frames and what its positions recorded.
+void count_positions(const RunData& data, RunStudy& study) {
+  study.positions = data.positions.size();
+  const stats::EqualWidthBins bins = distance_classes();
+  for (const PositionData& p : data.positions) {
+    study.failed_positions += p.record.status == store::PositionStatus::kFailed ? 1 : 0;
+    study.frames += p.frames;
+    study.visible_markers_recorded |= !p.record.visible_markers.empty();
+    study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
+    study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
+    if (p.record.status == store::PositionStatus::kOk &&
+        (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
+      ++study.positions_outside_classes;
+    }
+  }
 }
 
 }  // namespace
@@ -374,21 +465,7 @@ RunStudy compute_study(const RunData& data, const ReportOptions& options) {
   study.run = data.run;
   study.options = options;
   study.events = data.events;
-  study.positions = data.positions.size();
-  for (const PositionData& p : data.positions) {
-    study.failed_positions += p.record.status == store::PositionStatus::kFailed ? 1 : 0;
-    study.frames += p.frames;
-    study.visible_markers_recorded |= !p.record.visible_markers.empty();
-    study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
-    study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
-  }
-  const stats::EqualWidthBins bins = distance_classes();
-  for (const PositionData& p : data.positions) {
-    if (p.record.status == store::PositionStatus::kOk &&
-        (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
-      ++study.positions_outside_classes;
-    }
-  }
+  count_positions(data, study);
   study.corner_noise = corner_noise_by_class(data);
   for (const SolverScopeData& rows : data.solvers) {
     study.estimates += rows.samples.size();

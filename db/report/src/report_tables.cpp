@@ -1,9 +1,7 @@
 // The tables of the report: the paper's Tables 2-6 with the paper's values
 // beside ours, and the tables of the statistics beyond the paper.
-#include <cmath>
-
+#include "report_data.hpp"
 #include "report_document.hpp"
-#include "report_study.hpp"
 
 namespace db::report {
 namespace {
@@ -18,6 +16,16 @@ html::Cell count(std::size_t n) {
   return {std::to_string(n), "num", ""};
 }
 
+// This run's study of a solver and scope, then the baseline's if it has one.
+std::vector<std::pair<const SolverStudy*, std::string>> with_baseline(const ReportInput& in,
+                                                                      const SolverStudy& s) {
+  std::vector<std::pair<const SolverStudy*, std::string>> out{{&s, "this run"}};
+  if (in.baseline) {
+    if (const SolverStudy* b = in.baseline->find(s.solver, s.scope)) out.push_back({b, "baseline"});
+  }
+  return out;
+}
+
 // Rows of one table for every solver of the scope: ours, the baseline's
 // (when there is one) and the paper's (pose-marker scope, the paper's solvers).
 template <class Ours, class Paper>
@@ -25,15 +33,10 @@ void solver_rows(const ReportInput& in, const std::string& scope, html::Table& t
                  Paper paper) {
   for (const SolverStudy& s : in.study.solvers) {
     if (s.scope != scope) continue;
-    std::vector<html::Cell> row{text(s.solver), text("this run")};
-    ours(s, row);
-    t.rows.push_back(std::move(row));
-    if (in.baseline) {
-      if (const SolverStudy* b = in.baseline->find(s.solver, scope)) {
-        std::vector<html::Cell> brow{text(s.solver), text("baseline")};
-        ours(*b, brow);
-        t.rows.push_back(std::move(brow));
-      }
+    for (const auto& [study, source] : with_baseline(in, s)) {
+      std::vector<html::Cell> row{text(s.solver), text(source)};
+      ours(*study, row);
+      t.rows.push_back(std::move(row));
     }
     if (scope != "target") {
       if (const auto p = paper_values(s.solver)) {
@@ -47,262 +50,280 @@ void solver_rows(const ReportInput& in, const std::string& scope, html::Table& t
   }
 }
 
-// This run's study of a solver and scope, then the baseline's if it has one.
-std::vector<std::pair<const SolverStudy*, std::string>> with_baseline(const ReportInput& in,
-                                                                      const SolverStudy& s) {
-  std::vector<std::pair<const SolverStudy*, std::string>> out{{&s, "this run"}};
-  if (in.baseline) {
-    if (const SolverStudy* b = in.baseline->find(s.solver, s.scope)) out.push_back({b, "baseline"});
-  }
-  return out;
-}
-
 std::string tid(const std::string& name, const std::string& scope) {
   return name + "-" + scope;
+}
+
+// "lower-upper" of a class, each with `digits` significant digits.
+std::string class_range(double lower, double upper, int digits) {
+  return num(lower, digits) + "-" + num(upper, digits);
+}
+
+// Tables 2 and 3: count, mean, variance and sd of an image error, px, ours
+// beside the paper's (over its 1,400 poses).
+void add_image_error_table(const ReportInput& in, const std::string& scope, Section& sec,
+                           const std::string& name, const std::string& caption,
+                           stats::Summary SolverStudy::*ours, double PaperValues::*paper_mean,
+                           double PaperValues::*paper_variance, double PaperValues::*paper_sd) {
+  html::Table t{tid(name, scope),
+                caption,
+                {"solver", "source", "n", "mean (px)", "variance (px²)", "sd (px)"},
+                {}};
+  solver_rows(
+      in, scope, t,
+      [&](const SolverStudy& s, std::vector<html::Cell>& r) {
+        const stats::Summary& e = s.*ours;
+        r.insert(r.end(), {count(e.count), number(e.mean), number(e.variance), number(e.sd)});
+      },
+      [&](const PaperValues& p, std::vector<html::Cell>& r) {
+        r.insert(r.end(), {text("1400"), number(p.*paper_mean), number(p.*paper_variance),
+                           number(p.*paper_sd)});
+      });
+  sec.table(std::move(t));
+}
+
+// Table 4 and the Deming line beside it.
+void add_regression_table(const ReportInput& in, const std::string& scope, Section& sec) {
+  html::Table t{tid("table4", scope),
+                "Regression estimated = a * true + b, m, with asymptotic standard errors "
+                "(paper Table 4); Deming errors-in-variables fit beside it (jackknife "
+                "standard errors; delta = var(estimate error) / var(true-distance error))",
+                {"solver", "source", "n", "a", "se(a)", "b (m)", "se(b) (m)", "Deming a", "se",
+                 "Deming b (m)", "se (m)", "delta"},
+                {}};
+  solver_rows(
+      in, scope, t,
+      [](const SolverStudy& s, std::vector<html::Cell>& r) {
+        const double nan = kNaN;
+        r.push_back(count(s.ols ? s.ols->n : 0));
+        r.push_back(number(s.ols ? s.ols->slope : nan));
+        r.push_back(number(s.ols ? s.ols->slope_se : nan));
+        r.push_back(number(s.ols ? s.ols->intercept : nan));
+        r.push_back(number(s.ols ? s.ols->intercept_se : nan));
+        r.push_back(number(s.deming ? s.deming->slope : nan));
+        r.push_back(number(s.deming ? s.deming->slope_se : nan));
+        r.push_back(number(s.deming ? s.deming->intercept : nan));
+        r.push_back(number(s.deming ? s.deming->intercept_se : nan));
+        r.push_back(number(s.deming ? s.deming_delta : nan));
+      },
+      [](const PaperValues& p, std::vector<html::Cell>& r) {
+        r.insert(r.end(), {text("1939"), number(p.slope), number(p.slope_se), number(p.intercept_m),
+                           number(p.intercept_se_m), text("n/a"), text("n/a"), text("n/a"),
+                           text("n/a"), text("n/a")});
+      });
+  sec.table(std::move(t));
+}
+
+// Table 5: the residuals of the Table 4 regression.
+void add_residual_table(const ReportInput& in, const std::string& scope, Section& sec) {
+  html::Table t{
+      tid("table5", scope),
+      "Residuals of the regression (paper Table 5, gnuplot's vocabulary): RMS = "
+      "sqrt(SSR / (n - 2)) m, variance = SSR / (n - 2) m²; plain sqrt(SSR / n) beside",
+      {"solver", "source", "RMS of residuals (m)", "variance of residuals (m²)", "sqrt(SSR/n) (m)"},
+      {}};
+  solver_rows(
+      in, scope, t,
+      [](const SolverStudy& s, std::vector<html::Cell>& r) {
+        r.push_back(number(s.ols ? s.ols->residual_sd : kNaN));
+        r.push_back(number(s.ols ? s.ols->residual_variance : kNaN));
+        r.push_back(number(s.ols ? s.ols->residual_rms : kNaN));
+      },
+      [](const PaperValues& p, std::vector<html::Cell>& r) {
+        r.insert(r.end(), {number(p.residual_rms_m), number(p.residual_variance), text("n/a")});
+      });
+  sec.table(std::move(t));
+}
+
+// Table 6: the distance error and the time per pose.
+void add_distance_table(const ReportInput& in, const std::string& scope, Section& sec) {
+  html::Table t{
+      tid("table6", scope),
+      "Distance estimation (paper Table 6): error = estimated - true, m; mean "
+      "|error| and mean relative error beside; time per pose of every applicable "
+      "estimate, µs (the paper's Table 6 times and its per-pose timings of §3 were measured on "
+      "a Pentium III at 1.1 GHz; Table 6's are as printed)",
+      {"solver", "source", "n", "mean error (m)", "variance (m²)", "sd (m)", "mean |error| (m)",
+       "mean |error| / true (%)", "time (µs)", "time sd (µs)", "paper's time per pose (µs)"},
+      {}};
+  solver_rows(
+      in, scope, t,
+      [](const SolverStudy& s, std::vector<html::Cell>& r) {
+        r.insert(r.end(), {count(s.error_m.count), number(s.error_m.mean),
+                           number(s.error_m.variance), number(s.error_m.sd),
+                           number(s.abs_error_m.mean), number(s.relative_error_pct.mean),
+                           number(s.time_us.mean), number(s.time_us.sd), text("")});
+      },
+      [](const PaperValues& p, std::vector<html::Cell>& r) {
+        r.insert(r.end(), {text("1939"), number(p.mean_error_m), number(p.error_variance),
+                           number(p.error_sd_m), text("n/a"), text("n/a"), number(p.time_us),
+                           text("n/a"), number(p.time_per_pose_us)});
+      });
+  sec.table(std::move(t));
+}
+
+// The ten distance classes of every solver of the scope (Fig. 11's numbers
+// and those beyond the paper).
+void add_class_table(const ReportInput& in, const std::string& scope, Section& sec) {
+  html::Table t{
+      tid("classes", scope),
+      "Ten distance classes (paper Fig. 11): distance error, reprojection and "
+      "generalization error per class; jitter (pooled sd over the frames of a "
+      "position) against bias (mean over positions of their mean error); "
+      "efficiency = jitter² / (sigma_corner² · bound²)",
+      {"solver", "class (m)", "n", "mean error (m)", "variance (m²)", "sd (m)", "reprojection (px)",
+       "generalization (px)", "positions", "jitter (m)", "bias (m)", "bias sd (m)", "efficiency"},
+      {}};
+  for (const SolverStudy& s : in.study.solvers) {
+    if (s.scope != scope) continue;
+    for (const DistanceClassStudy& c : s.classes) {
+      t.rows.push_back({text(s.solver), text(class_range(c.lower_m, c.upper_m, 3)),
+                        count(c.error_m.count), number(c.error_m.mean), number(c.error_m.variance),
+                        number(c.error_m.sd), number(c.reprojection_px.mean),
+                        number(c.generalization_px.mean), count(c.positions), number(c.jitter_m),
+                        number(c.bias_m), number(c.bias_sd_m), number(c.efficiency)});
+    }
+  }
+  sec.table(std::move(t));
+}
+
+void add_convergence_table(const ReportInput& in, Section& sec) {
+  html::Table t{
+      "convergence",
+      "Convergence failures per solver: applicable estimates that did not converge, "
+      "by termination reason; skipped = solver not applicable to the scope",
+      {"solver", "scope", "run", "estimates", "skipped", "failed", "failure rate", "terminations"},
+      {}};
+  for (const SolverStudy& c : in.study.solvers) {
+    for (const auto& [s, source] : with_baseline(in, c)) {
+      std::string reasons;
+      for (const auto& [why, n] : s->failures_by_termination)
+        reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
+      t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->estimates),
+                        count(s->skipped), count(s->failed),
+                        number(fraction(s->failed, s->estimates - s->skipped)),
+                        text(reasons.empty() ? "-" : reasons)});
+    }
+  }
+  sec.table(std::move(t));
+}
+
+void add_ambiguity_table(const ReportInput& in, Section& sec) {
+  const ReportOptions& o = in.study.options;
+  html::Table t{"ambiguity",
+                "Planar ambiguity: converged estimates with ambiguity_ratio >= " +
+                    num(o.ambiguity_ratio_threshold, 3) +
+                    " (the worse planar solution within that factor of the better), and flips: "
+                    "frames whose pose-marker rotation differs from the whole-target rotation "
+                    "of the same solver by more than " +
+                    num(o.flip_angle_deg, 3) + " degrees",
+                {"solver", "scope", "run", "with ratio", "ambiguous", "rate", "frames compared",
+                 "flips", "flip rate"},
+                {}};
+  for (const SolverStudy& c : in.study.solvers) {
+    if (c.ambiguity_checked == 0 && c.flip_checked == 0) continue;
+    for (const auto& [s, source] : with_baseline(in, c)) {
+      t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->ambiguity_checked),
+                        count(s->ambiguous), number(fraction(s->ambiguous, s->ambiguity_checked)),
+                        count(s->flip_checked), count(s->flips),
+                        number(fraction(s->flips, s->flip_checked))});
+    }
+  }
+  sec.table(std::move(t));
+}
+
+void add_corner_noise_table(const RunStudy& st, Section& sec) {
+  html::Table t{"corner-noise",
+                "Corner noise per distance class: pooled within-position sd of each detected "
+                "corner coordinate over the frames of a position (the sigma of the "
+                "Cramér-Rao bound), px",
+                {"class (m)", "sigma (px)", "degrees of freedom"},
+                {}};
+  for (const ClassCornerNoise& c : st.corner_noise) {
+    t.rows.push_back(
+        {text(class_range(c.lower_m, c.upper_m, 3)), number(c.sigma_px), count(c.dof)});
+  }
+  sec.table(std::move(t));
+}
+
+void add_detection_table(const RunStudy& st, Section& sec) {
+  html::Table t{
+      "detection",
+      st.visible_markers_recorded
+          ? "Detection against the marker's projected side at the true pose: rate = "
+            "detected / (visible markers x frames); edge-fit residual (mean over "
+            "markers and positions) and corner jitter (pooled within-position sd)"
+          : "Detection rate not recorded (no visible markers in this run); corner "
+            "quality against the detected side length",
+      {"side (px)", "expected", "detected", "rate", "edge-fit residual (px)", "corner jitter (px)"},
+      {}};
+  for (const MarkerSizeClass& m : st.marker_sizes) {
+    t.rows.push_back({text(class_range(m.lower_px, m.upper_px, 4)), count(m.expected),
+                      count(m.detected), number(fraction(m.detected, m.expected)),
+                      number(m.edge_fit_residual_px.mean), number(m.corner_jitter_px)});
+  }
+  sec.table(std::move(t));
+}
+
+void add_stage_table(const ReportInput& in, Section& sec) {
+  html::Table t{
+      "stages",
+      "Time per stage of a position, s",
+      {"stage", "run", "n", "mean (s)", "sd (s)", "median (s)", "95th percentile (s)", "total (s)"},
+      {}};
+  auto rows = [&](const RunStudy& run, const std::string& source) {
+    for (const StageStudy& s : run.stages) {
+      t.rows.push_back({text(s.stage), text(source), count(s.seconds.count), number(s.seconds.mean),
+                        number(s.seconds.sd), number(s.median_s), number(s.p95_s),
+                        number(s.seconds.mean * static_cast<double>(s.seconds.count))});
+    }
+  };
+  rows(in.study, "this run");
+  if (in.baseline) rows(*in.baseline, "baseline");
+  sec.table(std::move(t));
+}
+
+void add_event_table(const RunStudy& st, Section& sec) {
+  html::Table t{"events",
+                "Faults, pauses and resumes recorded during the sweep",
+                {"at", "plan index", "kind", "message"},
+                {}};
+  for (const store::RunEvent& e : st.events) {
+    t.rows.push_back({text(e.at), text(e.plan_index ? std::to_string(*e.plan_index) : "-"),
+                      text(e.kind), text(e.message)});
+  }
+  if (t.rows.empty()) t.rows.push_back({text("-"), text("-"), text("none"), text("-")});
+  sec.table(std::move(t));
 }
 
 }  // namespace
 
 void add_paper_tables(const ReportInput& in, const std::string& scope, Section& sec) {
-  {
-    html::Table t{tid("table2", scope),
-                  "Reconstruction (reprojection) error, px (paper Table 2)",
-                  {"solver", "source", "n", "mean (px)", "variance (px²)", "sd (px)"},
-                  {}};
-    solver_rows(
-        in, scope, t,
-        [](const SolverStudy& s, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {count(s.reprojection_px.count), number(s.reprojection_px.mean),
-                             number(s.reprojection_px.variance), number(s.reprojection_px.sd)});
-        },
-        [](const PaperValues& p, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {text("1400"), number(p.reprojection_mean_px),
-                             number(p.reprojection_variance), number(p.reprojection_sd_px)});
-        });
-    sec.table(std::move(t));
-  }
+  add_image_error_table(in, scope, sec, "table2",
+                        "Reconstruction (reprojection) error, px (paper Table 2)",
+                        &SolverStudy::reprojection_px, &PaperValues::reprojection_mean_px,
+                        &PaperValues::reprojection_variance, &PaperValues::reprojection_sd_px);
   if (scope != "target") {
-    html::Table t{tid("table3", scope),
-                  "Generalization error: RMS reprojection error of the other markers' corners "
-                  "with the pose marker's pose, px (paper Table 3)",
-                  {"solver", "source", "n", "mean (px)", "variance (px²)", "sd (px)"},
-                  {}};
-    solver_rows(
-        in, scope, t,
-        [](const SolverStudy& s, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {count(s.generalization_px.count), number(s.generalization_px.mean),
-                             number(s.generalization_px.variance), number(s.generalization_px.sd)});
-        },
-        [](const PaperValues& p, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {text("1400"), number(p.generalization_mean_px),
-                             number(p.generalization_variance), number(p.generalization_sd_px)});
-        });
-    sec.table(std::move(t));
+    add_image_error_table(
+        in, scope, sec, "table3",
+        "Generalization error: RMS reprojection error of the other markers' corners "
+        "with the pose marker's pose, px (paper Table 3)",
+        &SolverStudy::generalization_px, &PaperValues::generalization_mean_px,
+        &PaperValues::generalization_variance, &PaperValues::generalization_sd_px);
   }
-  {
-    html::Table t{tid("table4", scope),
-                  "Regression estimated = a * true + b, m, with asymptotic standard errors "
-                  "(paper Table 4); Deming errors-in-variables fit beside it (jackknife "
-                  "standard errors; delta = var(estimate error) / var(true-distance error))",
-                  {"solver", "source", "n", "a", "se(a)", "b (m)", "se(b) (m)", "Deming a", "se",
-                   "Deming b (m)", "se (m)", "delta"},
-                  {}};
-    solver_rows(
-        in, scope, t,
-        [](const SolverStudy& s, std::vector<html::Cell>& r) {
-          const double nan = kNaN;
-          r.push_back(count(s.ols ? s.ols->n : 0));
-          r.push_back(number(s.ols ? s.ols->slope : nan));
-          r.push_back(number(s.ols ? s.ols->slope_se : nan));
-          r.push_back(number(s.ols ? s.ols->intercept : nan));
-          r.push_back(number(s.ols ? s.ols->intercept_se : nan));
-          r.push_back(number(s.deming ? s.deming->slope : nan));
-          r.push_back(number(s.deming ? s.deming->slope_se : nan));
-          r.push_back(number(s.deming ? s.deming->intercept : nan));
-          r.push_back(number(s.deming ? s.deming->intercept_se : nan));
-          r.push_back(number(s.deming ? s.deming_delta : nan));
-        },
-        [](const PaperValues& p, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {text("1939"), number(p.slope), number(p.slope_se),
-                             number(p.intercept_m), number(p.intercept_se_m), text("n/a"),
-                             text("n/a"), text("n/a"), text("n/a"), text("n/a")});
-        });
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{tid("table5", scope),
-                  "Residuals of the regression (paper Table 5, gnuplot's vocabulary): RMS = "
-                  "sqrt(SSR / (n - 2)) m, variance = SSR / (n - 2) m²; plain sqrt(SSR / n) beside",
-                  {"solver", "source", "RMS of residuals (m)", "variance of residuals (m²)",
-                   "sqrt(SSR/n) (m)"},
-                  {}};
-    solver_rows(
-        in, scope, t,
-        [](const SolverStudy& s, std::vector<html::Cell>& r) {
-          r.push_back(number(s.ols ? s.ols->residual_sd : kNaN));
-          r.push_back(number(s.ols ? s.ols->residual_variance : kNaN));
-          r.push_back(number(s.ols ? s.ols->residual_rms : kNaN));
-        },
-        [](const PaperValues& p, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {number(p.residual_rms_m), number(p.residual_variance), text("n/a")});
-        });
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{
-        tid("table6", scope),
-        "Distance estimation (paper Table 6): error = estimated - true, m; mean "
-        "|error| and mean relative error beside; time per pose of every applicable "
-        "estimate, µs (the paper's Table 6 times and its per-pose timings of §3 were measured on "
-        "a Pentium III at 1.1 GHz; Table 6's are as printed)",
-        {"solver", "source", "n", "mean error (m)", "variance (m²)", "sd (m)", "mean |error| (m)",
-         "mean |error| / true (%)", "time (µs)", "time sd (µs)", "paper's time per pose (µs)"},
-        {}};
-    solver_rows(
-        in, scope, t,
-        [](const SolverStudy& s, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {count(s.error_m.count), number(s.error_m.mean),
-                             number(s.error_m.variance), number(s.error_m.sd),
-                             number(s.abs_error_m.mean), number(s.relative_error_pct.mean),
-                             number(s.time_us.mean), number(s.time_us.sd), text("")});
-        },
-        [](const PaperValues& p, std::vector<html::Cell>& r) {
-          r.insert(r.end(), {text("1939"), number(p.mean_error_m), number(p.error_variance),
-                             number(p.error_sd_m), text("n/a"), text("n/a"), number(p.time_us),
-                             text("n/a"), number(p.time_per_pose_us)});
-        });
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{tid("classes", scope),
-                  "Ten distance classes (paper Fig. 11): distance error, reprojection and "
-                  "generalization error per class; jitter (pooled sd over the frames of a "
-                  "position) against bias (mean over positions of their mean error); "
-                  "efficiency = jitter² / (sigma_corner² · bound²)",
-                  {"solver", "class (m)", "n", "mean error (m)", "variance (m²)", "sd (m)",
-                   "reprojection (px)", "generalization (px)", "positions", "jitter (m)",
-                   "bias (m)", "bias sd (m)", "efficiency"},
-                  {}};
-    for (const SolverStudy& s : in.study.solvers) {
-      if (s.scope != scope) continue;
-      for (const DistanceClassStudy& c : s.classes) {
-        t.rows.push_back({text(s.solver), text(num(c.lower_m, 3) + "-" + num(c.upper_m, 3)),
-                          count(c.error_m.count), number(c.error_m.mean),
-                          number(c.error_m.variance), number(c.error_m.sd),
-                          number(c.reprojection_px.mean), number(c.generalization_px.mean),
-                          count(c.positions), number(c.jitter_m), number(c.bias_m),
-                          number(c.bias_sd_m), number(c.efficiency)});
-      }
-    }
-    sec.table(std::move(t));
-  }
+  add_regression_table(in, scope, sec);
+  add_residual_table(in, scope, sec);
+  add_distance_table(in, scope, sec);
+  add_class_table(in, scope, sec);
 }
 
 void add_beyond_tables(const ReportInput& in, Section& sec) {
-  const RunStudy& st = in.study;
-  {
-    html::Table t{"convergence",
-                  "Convergence failures per solver: applicable estimates that did not converge, "
-                  "by termination reason; skipped = solver not applicable to the scope",
-                  {"solver", "scope", "run", "estimates", "skipped", "failed", "failure rate",
-                   "terminations"},
-                  {}};
-    for (const SolverStudy& c : st.solvers) {
-      for (const auto& [s, source] : with_baseline(in, c)) {
-        std::string reasons;
-        for (const auto& [why, n] : s->failures_by_termination)
-          reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
-        t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->estimates),
-                          count(s->skipped), count(s->failed),
-                          number(fraction(s->failed, s->estimates - s->skipped)),
-                          text(reasons.empty() ? "-" : reasons)});
-      }
-    }
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{"ambiguity",
-                  "Planar ambiguity: converged estimates with ambiguity_ratio >= " +
-                      num(st.options.ambiguity_ratio_threshold, 3) +
-                      " (the worse planar solution within that factor of the better), and flips: "
-                      "frames whose pose-marker rotation differs from the whole-target rotation "
-                      "of the same solver by more than " +
-                      num(st.options.flip_angle_deg, 3) + " degrees",
-                  {"solver", "scope", "run", "with ratio", "ambiguous", "rate", "frames compared",
-                   "flips", "flip rate"},
-                  {}};
-    for (const SolverStudy& c : st.solvers) {
-      if (c.ambiguity_checked == 0 && c.flip_checked == 0) continue;
-      for (const auto& [s, source] : with_baseline(in, c)) {
-        t.rows.push_back(
-            {text(s->solver), text(s->scope), text(source), count(s->ambiguity_checked),
-             count(s->ambiguous), number(fraction(s->ambiguous, s->ambiguity_checked)),
-             count(s->flip_checked), count(s->flips), number(fraction(s->flips, s->flip_checked))});
-      }
-    }
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{"corner-noise",
-                  "Corner noise per distance class: pooled within-position sd of each detected "
-                  "corner coordinate over the frames of a position (the sigma of the "
-                  "Cramér-Rao bound), px",
-                  {"class (m)", "sigma (px)", "degrees of freedom"},
-                  {}};
-    for (const ClassCornerNoise& c : st.corner_noise) {
-      t.rows.push_back(
-          {text(num(c.lower_m, 3) + "-" + num(c.upper_m, 3)), number(c.sigma_px), count(c.dof)});
-    }
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{"detection",
-                  st.visible_markers_recorded
-                      ? "Detection against the marker's projected side at the true pose: rate = "
-                        "detected / (visible markers x frames); edge-fit residual (mean over "
-                        "markers and positions) and corner jitter (pooled within-position sd)"
-                      : "Detection rate not recorded (no visible markers in this run); corner "
-                        "quality against the detected side length",
-                  {"side (px)", "expected", "detected", "rate", "edge-fit residual (px)",
-                   "corner jitter (px)"},
-                  {}};
-    for (const MarkerSizeClass& m : st.marker_sizes) {
-      t.rows.push_back({text(num(m.lower_px, 4) + "-" + num(m.upper_px, 4)), count(m.expected),
-                        count(m.detected), number(fraction(m.detected, m.expected)),
-                        number(m.edge_fit_residual_px.mean), number(m.corner_jitter_px)});
-    }
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{"stages",
-                  "Time per stage of a position, s",
-                  {"stage", "run", "n", "mean (s)", "sd (s)", "median (s)", "95th percentile (s)",
-                   "total (s)"},
-                  {}};
-    auto rows = [&](const RunStudy& run, const std::string& source) {
-      for (const StageStudy& s : run.stages) {
-        t.rows.push_back({text(s.stage), text(source), count(s.seconds.count),
-                          number(s.seconds.mean), number(s.seconds.sd), number(s.median_s),
-                          number(s.p95_s),
-                          number(s.seconds.mean * static_cast<double>(s.seconds.count))});
-      }
-    };
-    rows(st, "this run");
-    if (in.baseline) rows(*in.baseline, "baseline");
-    sec.table(std::move(t));
-  }
-  {
-    html::Table t{"events",
-                  "Faults, pauses and resumes recorded during the sweep",
-                  {"at", "plan index", "kind", "message"},
-                  {}};
-    for (const store::RunEvent& e : st.events) {
-      t.rows.push_back({text(e.at), text(e.plan_index ? std::to_string(*e.plan_index) : "-"),
-                        text(e.kind), text(e.message)});
-    }
-    if (t.rows.empty()) t.rows.push_back({text("-"), text("-"), text("none"), text("-")});
-    sec.table(std::move(t));
-  }
+  add_convergence_table(in, sec);
+  add_ambiguity_table(in, sec);
+  add_corner_noise_table(in.study, sec);
+  add_detection_table(in.study, sec);
+  add_stage_table(in, sec);
+  add_event_table(in.study, sec);
 }
 
 void add_comparison(const ReportInput& in, Section& sec) {

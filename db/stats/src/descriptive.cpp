@@ -120,30 +120,4 @@ std::optional<std::size_t> EqualWidthBins::index_of(double value) const {
   return k;
 }
 
-BinnedSummary summarize_by_class(const EqualWidthBins& bins, const std::vector<double>& keys,
-                                 const std::vector<double>& values) {
-  constexpr const char* kName = "summarize_by_class";
-  detail::require_same_size(kName, keys, values);
-  detail::require_finite(kName, "values", values);
-  std::vector<std::vector<double>> members(bins.count());
-  BinnedSummary out;
-  for (std::size_t i = 0; i < keys.size(); ++i) {
-    if (std::isnan(keys[i])) {
-      throw StatsError(std::string(kName) + ": keys[" + std::to_string(i) +
-                       "] is NaN; expected a number");
-    }
-    const auto k = bins.index_of(keys[i]);
-    if (k) {
-      members[*k].push_back(values[i]);
-    } else {
-      ++out.outside;
-    }
-  }
-  out.classes.reserve(bins.count());
-  for (std::size_t k = 0; k < bins.count(); ++k) {
-    out.classes.push_back({bins.edge(k), bins.edge(k + 1), summarize(members[k])});
-  }
-  return out;
-}
-
 }  // namespace db::stats

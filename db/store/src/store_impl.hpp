@@ -1,7 +1,9 @@
 #pragma once
 // db::store::Store's state, shared by store_runs.cpp and store_positions.cpp (private to db).
 
-#include <memory>
+#include <cstdint>
+#include <string>
+#include <utility>
 
 #include "db/store/sqlite.hpp"
 

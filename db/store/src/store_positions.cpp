@@ -228,9 +228,9 @@ EstimateRecord read_estimate(const sqlite::Statement& row, int first) {
 std::vector<PositionRecord> Store::positions(std::int64_t run_id) const {
   sqlite::Connection& c = impl_->connection;
   // One read transaction: a consistent snapshot while a sweep keeps appending.
-  c.exec("BEGIN");
+  sqlite::Transaction snapshot(c, sqlite::Transaction::Kind::kRead);
   std::vector<PositionRecord> out;
-  try {
+  {
     sqlite::Statement select(
         c, std::string(kPositionColumns) + "WHERE run_id = ?1 ORDER BY plan_index");
     PositionDetailsReader details(c);
@@ -240,19 +240,16 @@ std::vector<PositionRecord> Store::positions(std::int64_t run_id) const {
       details.read(select.get_int64(0), p);
       out.push_back(std::move(p));
     }
-  } catch (...) {
-    c.exec("ROLLBACK");
-    throw;
   }
-  c.exec("COMMIT");
+  snapshot.commit();
   return out;
 }
 
 PositionRecord Store::position(std::int64_t run_id, std::int64_t plan_index) const {
   sqlite::Connection& c = impl_->connection;
-  c.exec("BEGIN");
+  sqlite::Transaction snapshot(c, sqlite::Transaction::Kind::kRead);
   PositionRecord p;
-  try {
+  {
     sqlite::Statement select(
         c, std::string(kPositionColumns) + "WHERE run_id = ?1 AND plan_index = ?2");
     select.bind(1, run_id).bind(2, plan_index);
@@ -304,11 +301,8 @@ PositionRecord Store::position(std::int64_t run_id, std::int64_t plan_index) con
       estimates.reset();
       p.frames.push_back(std::move(f));
     }
-  } catch (...) {
-    c.exec("ROLLBACK");
-    throw;
   }
-  c.exec("COMMIT");
+  snapshot.commit();
   return p;
 }
 

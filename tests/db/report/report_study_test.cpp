@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <memory>
 
 #include "db/report/report.hpp"
 #include "store_fixture.hpp"

@@ -73,105 +73,148 @@ inline bool name_char(char c) {
          c == '.';
 }
 
-inline Document parse(const std::string& s) {
-  Document doc;
-  std::vector<size_t> open;  // indices into doc.elements
-  bool root_closed = false;
-  auto fail = [&](const std::string& what, size_t at) {
-    doc.error = what + " at offset " + std::to_string(at) + ": '" + s.substr(at, 40) + "'";
-    return doc;
-  };
-  size_t i = 0;
-  while (i < s.size()) {
-    if (s[i] != '<') {
-      const size_t next = s.find('<', i);
-      const std::string raw = s.substr(i, next == std::string::npos ? std::string::npos : next - i);
-      if (raw.find('>') != std::string::npos) return fail("'>' in text", i);
-      std::string err;
-      const std::string text = decode(raw, err);
-      if (!err.empty()) return fail(err, i);
-      if (open.empty()) {
-        if (text.find_first_not_of(" \t\r\n") != std::string::npos)
-          return fail("text outside the root element", i);
-      } else {
-        doc.elements[open.back()].text += text;
-      }
-      i = next == std::string::npos ? s.size() : next;
-      continue;
+// One pass over a text: each step reads the construct at the cursor (text,
+// comment, end tag, start tag) and returns false once it has recorded an
+// error, with the elements read so far.
+class Parser {
+ public:
+  explicit Parser(const std::string& s) : s_(s) {}
+
+  Document run() {
+    while (i_ < s_.size() && step()) {
     }
-    if (s.compare(i, 4, "<!--") == 0) {
-      const size_t end = s.find("-->", i);
-      if (end == std::string::npos) return fail("unterminated comment", i);
-      i = end + 3;
-      continue;
-    }
-    if (s.compare(i, 2, "<?") == 0 || s.compare(i, 2, "<!") == 0)
-      return fail("prolog, DOCTYPE or CDATA not expected in an SVG fragment", i);
-    if (s.compare(i, 2, "</") == 0) {
-      size_t j = i + 2;
-      while (j < s.size() && name_char(s[j]))
-        ++j;
-      const std::string name = s.substr(i + 2, j - i - 2);
-      while (j < s.size() && std::isspace(static_cast<unsigned char>(s[j])))
-        ++j;
-      if (j >= s.size() || s[j] != '>') return fail("malformed end tag", i);
-      if (open.empty() || doc.elements[open.back()].name != name)
-        return fail("end tag </" + name + "> does not match the open element", i);
-      open.pop_back();
-      if (open.empty()) root_closed = true;
-      i = j + 1;
-      continue;
-    }
-    if (root_closed) return fail("second root element", i);
-    Element e;
-    size_t j = i + 1;
-    while (j < s.size() && name_char(s[j]))
+    if (!doc_.error.empty()) return doc_;
+    if (!open_.empty())
+      fail("element <" + doc_.elements[open_.back()].name + "> not closed", 0);
+    else if (doc_.elements.empty())
+      fail("no element", 0);
+    return doc_;
+  }
+
+ private:
+  bool fail(const std::string& what, size_t at) {
+    doc_.error = what + " at offset " + std::to_string(at) + ": '" + s_.substr(at, 40) + "'";
+    return false;
+  }
+  size_t skip_name(size_t j) const {
+    while (j < s_.size() && name_char(s_[j]))
       ++j;
-    e.name = s.substr(i + 1, j - i - 1);
-    if (e.name.empty()) return fail("'<' without a tag name", i);
-    e.depth = static_cast<int>(open.size());
+    return j;
+  }
+  size_t skip_space(size_t j) const {
+    while (j < s_.size() && std::isspace(static_cast<unsigned char>(s_[j])))
+      ++j;
+    return j;
+  }
+
+  bool step() {
+    if (s_[i_] != '<') return text();
+    if (s_.compare(i_, 4, "<!--") == 0) return comment();
+    if (s_.compare(i_, 2, "<?") == 0 || s_.compare(i_, 2, "<!") == 0)
+      return fail("prolog, DOCTYPE or CDATA not expected in an SVG fragment", i_);
+    if (s_.compare(i_, 2, "</") == 0) return end_tag();
+    return start_tag();
+  }
+
+  bool text() {
+    const size_t next = s_.find('<', i_);
+    const std::string raw =
+        s_.substr(i_, next == std::string::npos ? std::string::npos : next - i_);
+    if (raw.find('>') != std::string::npos) return fail("'>' in text", i_);
+    std::string err;
+    const std::string text = decode(raw, err);
+    if (!err.empty()) return fail(err, i_);
+    if (open_.empty()) {
+      if (text.find_first_not_of(" \t\r\n") != std::string::npos)
+        return fail("text outside the root element", i_);
+    } else {
+      doc_.elements[open_.back()].text += text;
+    }
+    i_ = next == std::string::npos ? s_.size() : next;
+    return true;
+  }
+
+  bool comment() {
+    const size_t end = s_.find("-->", i_);
+    if (end == std::string::npos) return fail("unterminated comment", i_);
+    i_ = end + 3;
+    return true;
+  }
+
+  bool end_tag() {
+    size_t j = skip_name(i_ + 2);
+    const std::string name = s_.substr(i_ + 2, j - i_ - 2);
+    j = skip_space(j);
+    if (j >= s_.size() || s_[j] != '>') return fail("malformed end tag", i_);
+    if (open_.empty() || doc_.elements[open_.back()].name != name)
+      return fail("end tag </" + name + "> does not match the open element", i_);
+    open_.pop_back();
+    if (open_.empty()) root_closed_ = true;
+    i_ = j + 1;
+    return true;
+  }
+
+  bool start_tag() {
+    if (root_closed_) return fail("second root element", i_);
+    Element e;
+    size_t j = skip_name(i_ + 1);
+    e.name = s_.substr(i_ + 1, j - i_ - 1);
+    if (e.name.empty()) return fail("'<' without a tag name", i_);
+    e.depth = static_cast<int>(open_.size());
     bool self_closing = false;
     for (;;) {
-      while (j < s.size() && std::isspace(static_cast<unsigned char>(s[j])))
-        ++j;
-      if (j >= s.size()) return fail("unterminated start tag", i);
-      if (s[j] == '>') {
+      j = skip_space(j);
+      if (j >= s_.size()) return fail("unterminated start tag", i_);
+      if (s_[j] == '>') {
         ++j;
         break;
       }
-      if (s.compare(j, 2, "/>") == 0) {
+      if (s_.compare(j, 2, "/>") == 0) {
         self_closing = true;
         j += 2;
         break;
       }
-      const size_t a = j;
-      while (j < s.size() && name_char(s[j]))
-        ++j;
-      const std::string attr = s.substr(a, j - a);
-      if (attr.empty() || j >= s.size() || s[j] != '=') return fail("malformed attribute", a);
-      ++j;
-      if (j >= s.size() || (s[j] != '"' && s[j] != '\'')) return fail("unquoted attribute", a);
-      const char quote = s[j];
-      const size_t end = s.find(quote, j + 1);
-      if (end == std::string::npos) return fail("unterminated attribute value", a);
-      const std::string raw = s.substr(j + 1, end - j - 1);
-      if (raw.find('<') != std::string::npos) return fail("'<' in attribute value", a);
-      std::string err;
-      const std::string value = decode(raw, err);
-      if (!err.empty()) return fail(err, a);
-      if (!e.attrs.emplace(attr, value).second) return fail("duplicate attribute " + attr, a);
-      j = end + 1;
+      if (!attribute(e, j)) return false;
     }
-    doc.elements.push_back(e);
+    doc_.elements.push_back(e);
     if (!self_closing)
-      open.push_back(doc.elements.size() - 1);
-    else if (open.empty())
-      root_closed = true;
-    i = j;
+      open_.push_back(doc_.elements.size() - 1);
+    else if (open_.empty())
+      root_closed_ = true;
+    i_ = j;
+    return true;
   }
-  if (!open.empty()) return fail("element <" + doc.elements[open.back()].name + "> not closed", 0);
-  if (doc.elements.empty()) return fail("no element", 0);
-  return doc;
+
+  // name="value" or name='value' at j, into e; j moves past it.
+  bool attribute(Element& e, size_t& j) {
+    const size_t a = j;
+    j = skip_name(j);
+    const std::string attr = s_.substr(a, j - a);
+    if (attr.empty() || j >= s_.size() || s_[j] != '=') return fail("malformed attribute", a);
+    ++j;
+    if (j >= s_.size() || (s_[j] != '"' && s_[j] != '\'')) return fail("unquoted attribute", a);
+    const char quote = s_[j];
+    const size_t end = s_.find(quote, j + 1);
+    if (end == std::string::npos) return fail("unterminated attribute value", a);
+    const std::string raw = s_.substr(j + 1, end - j - 1);
+    if (raw.find('<') != std::string::npos) return fail("'<' in attribute value", a);
+    std::string err;
+    const std::string value = decode(raw, err);
+    if (!err.empty()) return fail(err, a);
+    if (!e.attrs.emplace(attr, value).second) return fail("duplicate attribute " + attr, a);
+    j = end + 1;
+    return true;
+  }
+
+  const std::string& s_;
+  Document doc_;
+  std::vector<size_t> open_;  // indices into doc_.elements
+  bool root_closed_ = false;
+  size_t i_ = 0;
+};
+
+inline Document parse(const std::string& s) {
+  return Parser(s).run();
 }
 
 // Elements named `name` (any name if "") that have CSS class `css_class` (any if "").

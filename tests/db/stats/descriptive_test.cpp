@@ -134,28 +134,4 @@ TEST(EqualWidthBins, RejectsAnEmptyRange) {
   EXPECT_THROW(EqualWidthBins(1.0, 1.0, 10), db::stats::StatsError);
 }
 
-TEST(SummarizeByClass, GivesHandCheckedCountMeanAndVariancePerClass) {
-  // keys -> class: 0.10, 0.15 -> 0; 0.19 (inner edge), 0.20 -> 1; 0.50 ->
-  // floor(0.40 / 0.09) = 4; 1.00 (top edge) -> 9; 1.20 -> outside.
-  // class 0 {1, 3}: mean 2, variance ((1-2)^2 + (3-2)^2) / 1 = 2;
-  // class 1 {10, 20}: mean 15, variance (25 + 25) / 1 = 50.
-  const std::vector<double> keys = {0.10, 0.15, 0.19, 0.20, 0.50, 1.00, 1.20};
-  const std::vector<double> values = {1, 3, 10, 20, 5, 7, 99};
-  const db::stats::BinnedSummary b = db::stats::summarize_by_class(kPaperClasses, keys, values);
-  ASSERT_EQ(b.classes.size(), 10u);
-  EXPECT_EQ(b.outside, 1u);
-  EXPECT_EQ(b.classes[0].summary.count, 2u);
-  EXPECT_DOUBLE_EQ(b.classes[0].summary.mean, 2.0);
-  EXPECT_DOUBLE_EQ(b.classes[0].summary.variance, 2.0);
-  EXPECT_EQ(b.classes[1].summary.count, 2u);
-  EXPECT_DOUBLE_EQ(b.classes[1].summary.mean, 15.0);
-  EXPECT_DOUBLE_EQ(b.classes[1].summary.variance, 50.0);
-  EXPECT_EQ(b.classes[4].summary.count, 1u);
-  EXPECT_EQ(b.classes[4].summary.mean, 5.0);
-  EXPECT_EQ(b.classes[9].summary.count, 1u);
-  EXPECT_EQ(b.classes[9].summary.mean, 7.0);
-  EXPECT_EQ(b.classes[2].summary.count, 0u);
-  EXPECT_DOUBLE_EQ(b.classes[1].lower, 0.19);
-}
-
 }  // namespace

@@ -62,6 +62,88 @@ std::string integrity_check(const std::string& path) {
   return result;
 }
 
+// Forks a writer that appends from the resume point, kills it with SIGKILL
+// at a random moment and sets `announced` to the appends it had started.
+// Every fourth kill is early: while the child opens the file (and recovers
+// the WAL the previous kill left) or runs its first query. The others let
+// 1-20 appends start, then kill somewhere inside or after the next one (a
+// sweep position takes of the order of a millisecond).
+void kill_a_writer(const std::string& path, std::int64_t run, int kill_number, std::mt19937& random,
+                   std::int64_t& announced) {
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  // No Store is open in the parent here: an SQLite connection must not
+  // cross a fork.
+  const pid_t child = fork();
+  ASSERT_NE(child, -1);
+  if (child == 0) {
+    close(pipe_fds[0]);
+    append_until_killed(path, run, pipe_fds[1]);
+  }
+  close(pipe_fds[1]);
+  announced = 0;
+  if (kill_number % 4 == 3) {
+    std::this_thread::sleep_for(
+        std::chrono::microseconds(std::uniform_int_distribution<int>(0, 3000)(random)));
+  } else {
+    const int appends = std::uniform_int_distribution<int>(1, 20)(random);
+    char byte = 0;
+    while (announced < appends && read(pipe_fds[0], &byte, 1) == 1) {
+      ++announced;
+    }
+    std::this_thread::sleep_for(
+        std::chrono::microseconds(std::uniform_int_distribution<int>(0, 2000)(random)));
+  }
+  kill(child, SIGKILL);
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  // Every append the child started was announced; the unread announcements
+  // are still in the pipe.
+  char drained[256];
+  for (ssize_t n; (n = read(pipe_fds[0], drained, sizeof drained)) > 0;)
+    announced += n;
+  close(pipe_fds[0]);
+  // Killed by us, not exited on an error of its own.
+  ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
+      << "child exited with status " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
+}
+
+// What the kills have left so far.
+struct CrashTally {
+  std::int64_t stored = 0;  // positions verified so far: 0 .. stored-1
+  int rounds_that_added = 0;
+  int kills_inside_an_append = 0;  // for information: depends on timing
+};
+
+// The file after a kill of a writer that had started `announced` appends:
+// intact, its plan indices exactly 0 .. n-1 with nothing committed lost,
+// every new position whole, and only the last append possibly missing.
+void check_after_kill(const std::string& path, std::int64_t run, std::int64_t announced,
+                      CrashTally& tally) {
+  ASSERT_EQ(integrity_check(path), "ok");
+  db::store::Store store(path);
+  const std::vector<std::int64_t> indices = store.completed_position_indices(run);
+  ASSERT_GE(static_cast<std::int64_t>(indices.size()), tally.stored);
+  for (std::size_t i = 0; i < indices.size(); ++i)
+    ASSERT_EQ(indices[i], std::int64_t(i));
+  EXPECT_EQ(store.first_incomplete_position(run), std::int64_t(indices.size()));
+  // The new positions field by field; the earlier ones were compared in
+  // earlier rounds and are re-counted below.
+  for (std::int64_t i = tally.stored; i < std::int64_t(indices.size()); ++i) {
+    ASSERT_EQ(store.position(run, i), sweep_position(i)) << "plan index " << i;
+  }
+  // Each append the child started is either all in the file or not at
+  // all: only the last one can be missing (the kill landed inside it).
+  const std::int64_t added = std::int64_t(indices.size()) - tally.stored;
+  ASSERT_TRUE(added == announced || added == announced - 1)
+      << added << " positions added, " << announced << " appends started";
+  if (added == announced - 1) ++tally.kills_inside_an_append;
+  if (added > 0) ++tally.rounds_that_added;
+  tally.stored = std::int64_t(indices.size());
+  // 2 frames x 10 solvers x 2 scopes estimates per position, none partial.
+  EXPECT_EQ(store.estimates(run, "solver_9").size(), std::size_t(tally.stored) * 4);
+}
+
 TEST(StoreCrash, KeepsEveryCommittedPositionWholeAcrossRepeatedSigkill) {
   db_test::ScratchDir dir;
   const std::string path = dir.file("crash.db");
@@ -75,81 +157,17 @@ TEST(StoreCrash, KeepsEveryCommittedPositionWholeAcrossRepeatedSigkill) {
   std::mt19937 random(seed);
 
   constexpr int kKills = 12;
-  std::int64_t stored = 0;  // positions verified so far: 0 .. stored-1
-  int rounds_that_added = 0;
-  int kills_inside_an_append = 0;  // for information: depends on timing
+  CrashTally tally;
   for (int kill_number = 0; kill_number < kKills; ++kill_number) {
     SCOPED_TRACE("kill " + std::to_string(kill_number));
-    int pipe_fds[2];
-    ASSERT_EQ(pipe(pipe_fds), 0);
-    // No Store is open in the parent here: an SQLite connection must not
-    // cross a fork.
-    const pid_t child = fork();
-    ASSERT_NE(child, -1);
-    if (child == 0) {
-      close(pipe_fds[0]);
-      append_until_killed(path, run, pipe_fds[1]);
-    }
-    close(pipe_fds[1]);
-    std::int64_t announced_before_kill = 0;
-    if (kill_number % 4 == 3) {
-      // Early kill: while the child opens the file (and recovers the WAL
-      // left by the previous kill) or runs its first query.
-      std::this_thread::sleep_for(
-          std::chrono::microseconds(std::uniform_int_distribution<int>(0, 3000)(random)));
-    } else {
-      // Let 1-20 appends start, then kill somewhere inside or after the
-      // next one (a sweep position takes of the order of a millisecond).
-      const int appends = std::uniform_int_distribution<int>(1, 20)(random);
-      char byte = 0;
-      while (announced_before_kill < appends && read(pipe_fds[0], &byte, 1) == 1) {
-        ++announced_before_kill;
-      }
-      std::this_thread::sleep_for(
-          std::chrono::microseconds(std::uniform_int_distribution<int>(0, 2000)(random)));
-    }
-    kill(child, SIGKILL);
-    int status = 0;
-    ASSERT_EQ(waitpid(child, &status, 0), child);
-    // Every append the child started was announced; the unread announcements
-    // are still in the pipe.
-    std::int64_t announced = announced_before_kill;
-    char drained[256];
-    for (ssize_t n; (n = read(pipe_fds[0], drained, sizeof drained)) > 0;)
-      announced += n;
-    close(pipe_fds[0]);
-    // Killed by us, not exited on an error of its own.
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)
-        << "child exited with status " << (WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-
-    ASSERT_EQ(integrity_check(path), "ok");
-    db::store::Store store(path);
-    const std::vector<std::int64_t> indices = store.completed_position_indices(run);
-    // Nothing committed is lost, and the indices are exactly 0 .. n-1.
-    ASSERT_GE(static_cast<std::int64_t>(indices.size()), stored);
-    for (std::size_t i = 0; i < indices.size(); ++i)
-      ASSERT_EQ(indices[i], std::int64_t(i));
-    EXPECT_EQ(store.first_incomplete_position(run), std::int64_t(indices.size()));
-    // Every position is whole: the new ones field by field, the earlier ones
-    // were compared in earlier rounds and are re-counted below.
-    for (std::int64_t i = stored; i < std::int64_t(indices.size()); ++i) {
-      ASSERT_EQ(store.position(run, i), sweep_position(i)) << "plan index " << i;
-    }
-    // Each append the child started is either all in the file or not at
-    // all: only the last one can be missing (the kill landed inside it).
-    const std::int64_t added = std::int64_t(indices.size()) - stored;
-    ASSERT_TRUE(added == announced || added == announced - 1)
-        << added << " positions added, " << announced << " appends started";
-    if (added == announced - 1) ++kills_inside_an_append;
-    if (added > 0) ++rounds_that_added;
-    stored = std::int64_t(indices.size());
-    // 2 frames x 10 solvers x 2 scopes estimates per position, none partial.
-    EXPECT_EQ(store.estimates(run, "solver_9").size(), std::size_t(stored) * 4);
+    std::int64_t announced = 0;
+    ASSERT_NO_FATAL_FAILURE(kill_a_writer(path, run, kill_number, random, announced));
+    ASSERT_NO_FATAL_FAILURE(check_after_kill(path, run, announced, tally));
   }
   // The kills did interrupt a writer that was making progress.
-  EXPECT_GE(rounds_that_added, 1);
-  RecordProperty("kills_inside_an_append", kills_inside_an_append);
-  RecordProperty("positions_before_resume", static_cast<int>(stored));
+  EXPECT_GE(tally.rounds_that_added, 1);
+  RecordProperty("kills_inside_an_append", tally.kills_inside_an_append);
+  RecordProperty("positions_before_resume", static_cast<int>(tally.stored));
 
   // A resumed sweep continues from the first missing index: nothing skipped,
   // nothing written twice.
@@ -158,7 +176,7 @@ TEST(StoreCrash, KeepsEveryCommittedPositionWholeAcrossRepeatedSigkill) {
     store.append_position(run, sweep_position(store.first_incomplete_position(run).value()));
   }
   const std::vector<std::int64_t> indices = store.completed_position_indices(run);
-  ASSERT_EQ(std::int64_t(indices.size()), stored + 3);
+  ASSERT_EQ(std::int64_t(indices.size()), tally.stored + 3);
   for (std::size_t i = 0; i < indices.size(); ++i)
     EXPECT_EQ(indices[i], std::int64_t(i));
   EXPECT_THROW(store.append_position(run, sweep_position(0)), db::store::DuplicatePosition);

@@ -51,7 +51,6 @@ class Page {
   // contents; id "" = generated from the text ("sec-" + slug, made unique).
   void heading(int level, const std::string& text, const std::string& id = "");
   void paragraph(const std::string& text);  // <p>, escaped
-  void raw_html(const std::string& html);   // trusted markup from the report, written as is
   // <table> with <caption>, <thead>, <tbody>. Throws std::invalid_argument
   // naming the table and row when a row has not header.size() cells (if the
   // header is not empty).

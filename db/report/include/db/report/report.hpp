@@ -298,14 +298,18 @@ struct ReportFiles {
 class Report {
  public:
   // Computes the study of `database` (see study_run); with a baseline, also
-  // the baseline's study and the comparison.
+  // the baseline's study (its run: baseline->run_id, else its latest
+  // completed one) and the comparison. Throws ReportInputError for unusable
+  // input of either file, StoreError for a failure while reading, and
+  // stats::StatsError if options.significance_k is not a finite k > 0.
   Report(const std::string& database, const ReportOptions& options,
          const std::optional<RunReference>& baseline = std::nullopt);
 
   const RunStudy& study() const { return study_; }
   const std::optional<RunStudy>& baseline() const { return baseline_; }
   const std::vector<ComparedFigure>& comparison() const { return comparison_; }
-  // True when some solver got significantly worse than the baseline.
+  // True when some solver got significantly worse than the baseline
+  // (db::report::regressed of comparison()); false without a baseline.
   bool regressed() const;
 
   // Writes report.html, report.json and the CSV tables into directory

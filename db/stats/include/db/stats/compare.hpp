@@ -24,10 +24,6 @@ struct Difference {
   // whose standard errors are asymptotic (slopes, intercepts).
   double dof = std::numeric_limits<double>::infinity();
   bool significant = false;  // |difference| > k * standard_error
-  // Significantly larger / smaller than the baseline (for an error figure,
-  // larger is worse).
-  bool increased() const { return significant && difference > 0.0; }
-  bool decreased() const { return significant && difference < 0.0; }
 };
 
 // Welch's comparison of two means from independent samples:
@@ -58,7 +54,8 @@ double two_sided_tail(double k, double dof);
 // StatsError.
 double two_sided_threshold(double p, double dof);
 
-// Slopes of two independent line fits, by compare_estimates.
+// Slopes of two independent line fits ([y]/[x]), by compare_estimates:
+// finite slopes and standard errors >= 0, k > 0; throws StatsError.
 Difference compare_slopes(const LineFit& candidate, const LineFit& baseline, double k = 3.0);
 
 }  // namespace db::stats

@@ -1,6 +1,7 @@
 // Descriptive statistics for the report tables: mean, unbiased variance and
-// standard deviation (paper Tables 2, 3, 6), percentiles, and summaries per
-// distance class (paper Fig. 11: ten equal-width classes over [0.10, 1.00] m).
+// standard deviation (paper Tables 2, 3, 6), percentiles, and the
+// equal-width classes of distances (paper Fig. 11: ten classes over
+// [0.10, 1.00] m).
 #pragma once
 
 #include <cstddef>
@@ -34,7 +35,10 @@ Summary summarize(const std::vector<double>& values);
 // add() throws StatsError on a non-finite value.
 class RunningSummary {
  public:
+  // Adds one value (units of the values). Throws StatsError naming the value
+  // and how many came before if it is not finite; the summary is unchanged.
   void add(double value);
+  // The Summary of the values added so far (as summarize, to rounding).
   Summary summary() const;
 
  private:
@@ -53,7 +57,9 @@ class RunningSummary {
 // Preconditions: values non-empty and finite, 0 <= q <= 1; throws StatsError.
 double quantile(std::vector<double> values, double q);
 
-// Several quantiles of the same values with one sort (same definition).
+// Several quantiles of the same values with one sort (same definition), in
+// the order of qs. Preconditions as quantile's, for every q; throws
+// StatsError.
 std::vector<double> quantiles(std::vector<double> values, const std::vector<double>& qs);
 
 // N equal-width classes over [lower, upper], e.g. the paper's ten distance
@@ -72,8 +78,10 @@ class EqualWidthBins {
   std::size_t count() const { return count_; }
   double lower() const { return lower_; }
   double upper() const { return upper_; }
-  // Edge i in [0, count]: lower + i (upper - lower) / count; edge(count) == upper.
+  // Edge i in [0, count]: lower + i (upper - lower) / count; edge(count) ==
+  // upper (as is any i > count).
   double edge(std::size_t i) const;
+  // Midpoint of class i (i < count).
   double centre(std::size_t i) const { return 0.5 * (edge(i) + edge(i + 1)); }
   // The class of value, or nullopt when it is outside [lower, upper] or NaN.
   std::optional<std::size_t> index_of(double value) const;
@@ -84,25 +92,5 @@ class EqualWidthBins {
   std::size_t count_;
   double tolerance_;
 };
-
-// One class of a binned summary: its edges and the summary of the values whose
-// key fell in it.
-struct ClassSummary {
-  double lower = 0.0;
-  double upper = 0.0;
-  Summary summary;
-};
-
-struct BinnedSummary {
-  std::vector<ClassSummary> classes;  // bins.count() entries, empty classes included
-  std::size_t outside = 0;            // keys outside [lower, upper]
-};
-
-// Per-class summary of values[i] by the class of keys[i] (e.g. keys = true
-// distance in m, values = distance error in m).
-// Preconditions: keys.size() == values.size(), keys not NaN, values finite;
-// throws StatsError.
-BinnedSummary summarize_by_class(const EqualWidthBins& bins, const std::vector<double>& keys,
-                                 const std::vector<double>& values);
 
 }  // namespace db::stats

@@ -21,6 +21,7 @@ enum class PositionStatus { kOk, kFailed };
 
 // "running", "completed", "aborted", "failed" (the text stored in runs.status).
 const char* to_string(RunStatus status);
+// "ok", "failed" (the text stored in positions.status).
 const char* to_string(PositionStatus status);
 
 // A file the run depends on, stored as a copy so that a run is

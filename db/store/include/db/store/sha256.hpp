@@ -13,10 +13,12 @@
 
 namespace db::store {
 
-// Incremental hasher: update() any number of times, then hex_digest() once.
+// Incremental hasher: update() any number of times, then digest() or
+// hex_digest() once. Never throws.
 class Sha256 {
  public:
   Sha256();
+  // Appends size bytes at data to the message. Precondition: no digest yet.
   void update(const void* data, std::size_t size);
   void update(std::string_view bytes) { update(bytes.data(), bytes.size()); }
   // The 32-byte digest. Finalises the hasher: call it once, after the last update().

@@ -18,6 +18,12 @@
 // A Store is one SQLite connection: use it from one thread at a time. Several
 // Stores (threads or processes) may open the same file; writers wait up to
 // StoreOptions::busy_timeout_ms for each other, readers never block the writer.
+//
+// Errors: besides the errors each member lists for its input, every member
+// throws StoreError, naming the file and the operation, when SQLite fails
+// (the disk is full, the file is locked beyond the busy timeout, the file is
+// damaged). A Store opened read_only throws StoreError from every writing
+// member.
 
 #include <cstdint>
 #include <memory>
@@ -39,10 +45,6 @@ class StoreError : public std::runtime_error {
 
 // The file is not a rig run database (another SQLite file, not SQLite at all),
 // or its schema is newer than this program knows.
-// The run status stored as `text` in runs.status of the database at `path`.
-// Throws StoreError naming the file if the text is none of to_string's.
-RunStatus run_status_from_text(const std::string& path, const std::string& text);
-
 class SchemaError : public StoreError {
  public:
   using StoreError::StoreError;
@@ -78,6 +80,11 @@ struct StoreOptions {
   bool record_store_time = false;
 };
 
+// The run status stored as `text` in runs.status of the database at `path`
+// (the inverse of to_string(RunStatus)). Throws StoreError naming the file
+// and the text if it is none of to_string's.
+RunStatus run_status_from_text(const std::string& path, const std::string& text);
+
 // Version of the SQLite library linked into this program ("3.40.1"), for a
 // run's library_versions_json: rig does not see SQLite itself.
 std::string sqlite_library_version();
@@ -95,11 +102,13 @@ class Store {
   // than kSchemaVersion; StoreError if it cannot be opened or switched to WAL.
   explicit Store(const std::string& path, StoreOptions options = {});
   ~Store();
+  // A moved-from Store may only be destroyed or assigned to.
   Store(Store&&) noexcept;
   Store& operator=(Store&&) noexcept;
   Store(const Store&) = delete;
   Store& operator=(const Store&) = delete;
 
+  // The path the Store was opened with, as given.
   const std::string& path() const;
 
   // Records a new run with status running and started_at now; returns its id.
@@ -139,25 +148,28 @@ class Store {
   // The run's events, oldest first. Throws StoreError for an unknown run.
   std::vector<RunEvent> events(std::int64_t run_id) const;
 
-  // Plan indices the run has (ok or failed), ascending.
+  // Plan indices the run has (ok or failed), ascending. Throws StoreError for
+  // an unknown run.
   std::vector<std::int64_t> completed_position_indices(std::int64_t run_id) const;
   // The smallest plan index in [0, plan_size) that the run does not have;
   // nullopt when every position is stored. Throws StoreError for an unknown run.
   std::optional<std::int64_t> first_incomplete_position(std::int64_t run_id) const;
 
   // The run's positions by plan index, with stage times, distance bounds and
-  // visible markers but WITHOUT frames
-  // (frames is empty): what a report iterates over. Use position() for one
-  // position in full.
+  // visible markers but WITHOUT frames (frames is empty): what a report
+  // iterates over, read in one snapshot. Use position() for one position in
+  // full. Empty for an unknown run.
   std::vector<PositionRecord> positions(std::int64_t run_id) const;
   // One position with its frames, detections and estimates in the order they
   // were appended. Throws StoreError if the run has no such position.
   PositionRecord position(std::int64_t run_id, std::int64_t plan_index) const;
 
   // Every estimate of one solver in a run (all scopes), by plan index, frame
-  // index and scope, with the position's true distance.
+  // index and order of appending, with the position's true distance. Empty
+  // for an unknown run or solver.
   std::vector<EstimateRow> estimates(std::int64_t run_id, const std::string& solver) const;
-  // Names of the solvers that have estimates in the run, sorted.
+  // Names of the solvers that have estimates in the run, sorted; empty for an
+  // unknown run.
   std::vector<std::string> solvers(std::int64_t run_id) const;
 
  private:
