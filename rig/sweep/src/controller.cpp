@@ -17,15 +17,12 @@
 #include "motion/errors.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "telemetry_messages.hpp"
+#include "vision/timing.hpp"
 
 namespace rig::sweep {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::int64_t ns_since_epoch(std::chrono::system_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
@@ -138,7 +135,7 @@ struct Controller::Impl {
     const bool go_on = control.wait_while_paused();
     {
       std::lock_guard<std::mutex> lock(mutex);
-      paused_s += seconds_since(pause_start);
+      paused_s += vision::seconds_since(pause_start);
     }
     if (!go_on) return false;
     store.record_event(run_id, "resume", "resumed", index);
@@ -155,10 +152,10 @@ struct Controller::Impl {
       try {
         const auto move_start = Clock::now();
         bench.move_to(p.x_mm, p.y_mm);
-        const double move_s = seconds_since(move_start);
+        const double move_s = vision::seconds_since(move_start);
         const auto settle_start = Clock::now();
         const motion::BenchStatus status = bench.wait_settled(config.settle.timeout);
-        const double settle_s = seconds_since(settle_start);
+        const double settle_s = vision::seconds_since(settle_start);
         rec.stage_times.push_back({"move", move_s});
         rec.stage_times.push_back({"settle", settle_s});
         return {status, move_s + settle_s};
@@ -271,7 +268,7 @@ struct Controller::Impl {
         } catch (const vision::CaptureError& e) {
           throw PositionFailure{"camera", e.what()};
         }
-        rec.stage_times.push_back({"capture", seconds_since(capture_start)});
+        rec.stage_times.push_back({"capture", vision::seconds_since(capture_start)});
         // The read-back again: the frames count only if the bench stayed put.
         // A bench that cannot be read now cannot vouch for them either.
         std::string unverified;
@@ -390,12 +387,12 @@ struct Controller::Impl {
         // the whole append, commit included, goes to telemetry.
         const auto store_start = Clock::now();
         store.append_position(run_id, rec);
-        rec.stage_times.push_back({"store_commit", seconds_since(store_start)});
+        rec.stage_times.push_back({"store_commit", vision::seconds_since(store_start)});
         {
           std::lock_guard<std::mutex> lock(mutex);
           ++stored;
           ++done_this_session;
-          elapsed_s = seconds_since(started);
+          elapsed_s = vision::seconds_since(started);
         }
         publish(position_message(rec));
         if (rec.status == db::store::PositionStatus::kOk) {
@@ -449,7 +446,7 @@ struct Controller::Impl {
              {"positions_failed", outcome.positions_failed},
              {"stored", outcome.stored_total},
              {"plan_size", plan.size()},
-             {"elapsed_s", seconds_since(started)}});
+             {"elapsed_s", vision::seconds_since(started)}});
   }
 };
 
