@@ -1,7 +1,7 @@
 // Sweep benchmarks: what one bench position costs the
 // controller once the bench has settled and the frames are in hand, i.e.
 // everything of rig::sweep::Controller's measure_position and append_position except
-// motion, settling and exposure (rig/src/controller.cpp):
+// motion, settling and exposure (rig/sweep/src/controller.cpp):
 //   per frame  vision::FrameMeasurer::measure (detector + every solver of the
 //              registry on the pose marker's scope and on the target's scope)
 //              and rig::sweep::to_frame_record;
