@@ -36,13 +36,14 @@ double reprojection_system(const Correspondences& c, const Pose& T, Matrix6d* Jt
     JtJ->setZero();
     Jtr->setZero();
   }
+  Eigen::Vector2d px;
+  ProjectionJacobian J;
   for (size_t i = 0; i < c.size(); ++i) {
-    const Eigen::Vector3d p = T * c.object_points[i];
-    if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
-    const Eigen::Vector2d r = cam.project(p) - c.image_points_px[i];
+    if (!project_with_jacobian(cam, T, c.object_points[i], &px, JtJ ? &J : nullptr))
+      return std::numeric_limits<double>::infinity();
+    const Eigen::Vector2d r = px - c.image_points_px[i];
     sum += r.squaredNorm();
     if (!JtJ) continue;
-    const ProjectionJacobian J = projection_jacobian(cam, T, c.object_points[i]);
     *JtJ += J.transpose() * J;
     *Jtr += J.transpose() * r;
   }

@@ -42,8 +42,11 @@ std::optional<double> distance_bound(const vision::Camera& camera, const vision:
   Eigen::Index row = 0;
   for (int id : ids) {
     for (const auto& corner : target.corners_m(id)) {
-      if (!((pose * corner).z() > 0)) return std::nullopt;
-      J.middleRows<2>(row) = vision::projection_jacobian(camera, pose, corner);
+      Eigen::Vector2d px;
+      vision::ProjectionJacobian corner_rows;
+      if (!vision::project_with_jacobian(camera, pose, corner, &px, &corner_rows))
+        return std::nullopt;
+      J.middleRows<2>(row) = corner_rows;
       row += 2;
     }
   }
