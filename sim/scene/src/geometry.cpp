@@ -81,8 +81,11 @@ class SheetView {
 
   // Adds weight x the radiance of every pixel of the tile at (u0, v0).
   void accumulate_tile(int u0, int v0, float weight, cv::Mat& radiance) const {
-    Tile tile{
-        u0, std::min(u0 + kTile, rays_.width) - 1, v0, std::min(v0 + kTile, rays_.height) - 1, {}};
+    Tile tile;  // the corners' footprints are filled by tile_region
+    tile.u0 = u0;
+    tile.u1 = std::min(u0 + kTile, rays_.width) - 1;
+    tile.v0 = v0;
+    tile.v1 = std::min(v0 + kTile, rays_.height) - 1;
     const Region region = tile_region(tile);
     if (region == Region::kMixed) {
       for (int v = tile.v0; v <= tile.v1; ++v) {
