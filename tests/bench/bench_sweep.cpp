@@ -1,7 +1,7 @@
 // Sweep benchmarks: what one bench position costs the
 // controller once the bench has settled and the frames are in hand, i.e.
 // everything of rig::sweep::Controller's measure_position and append_position except
-// motion, settling and exposure (rig/src/controller.cpp):
+// motion, settling and exposure (rig/sweep/src/controller.cpp):
 //   per frame  vision::FrameMeasurer::measure (detector + every solver of the
 //              registry on the pose marker's scope and on the target's scope)
 //              and rig::sweep::to_frame_record;
@@ -69,6 +69,7 @@
 #include "vision/frame_measurement.hpp"
 #include "vision/rig_geometry.hpp"
 #include "vision/target.hpp"
+#include "vision/timing.hpp"
 
 namespace {
 
@@ -77,10 +78,6 @@ using Clock = std::chrono::steady_clock;
 constexpr int kMaxFramesPerPosition = 3;  // config/sweeps/ci.toml
 constexpr double kBenchY_mm = 150.0;      // config/rigs/sim.toml: the camera faces the pose marker
 const double kBenchX_mm[] = {0.0, 100.0, 200.0, 300.0, 400.0, 500.0};
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 struct BenchPosition {
   double x_mm = 0, y_mm = 0;
@@ -159,7 +156,7 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
   rec.true_viewing_angle_deg = truth.viewing_angle_deg;
   rec.visible_markers = truth.visible_markers;
   rec.distance_bounds = truth.distance_bounds;
-  sums.truth += seconds_since(truth_start);
+  sums.truth += vision::seconds_since(truth_start);
 
   double detect_s = 0;
   std::map<std::string, double> solve_s;
@@ -178,7 +175,7 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
                               .count();
     f.source = "gige:Aravis-Fake-RIGSIM01";
     rec.frames.push_back(std::move(f));
-    sums.record += seconds_since(record_start);
+    sums.record += vision::seconds_since(record_start);
   }
   sums.detect += detect_s;
   sums.frames += frames_per_position;
@@ -257,7 +254,7 @@ void BM_PositionCompute(benchmark::State& state) {
     const auto start = Clock::now();
     db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
     benchmark::DoNotOptimize(rec);
-    sums.position_s.push_back(seconds_since(start));
+    sums.position_s.push_back(vision::seconds_since(start));
   }
   report_stages(state, sums, state.iterations());
 }
@@ -280,8 +277,8 @@ void BM_PositionComputeAndStore(benchmark::State& state) {
     const db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
     const auto store_start = Clock::now();
     db.store.append_position(db.run_id, rec);
-    sums.store += seconds_since(store_start);
-    sums.position_s.push_back(seconds_since(start));
+    sums.store += vision::seconds_since(store_start);
+    sums.position_s.push_back(vision::seconds_since(start));
   }
   report_stages(state, sums, state.iterations());
 }
@@ -310,7 +307,7 @@ void BM_EstimateInsertRate(benchmark::State& state) {
   for (auto _ : state) {
     const auto start = Clock::now();
     db.store.append_position(db.run_id, rec);
-    append_s.push_back(seconds_since(start));
+    append_s.push_back(vision::seconds_since(start));
     ++rec.plan_index;
   }
   state.counters["estimate_rows_per_s_median"] =
@@ -357,7 +354,7 @@ void BM_ResidentMemory10k(benchmark::State& state) {
       const db::store::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
       const auto store_start = Clock::now();
       db.store.append_position(db.run_id, rec);
-      sums.store += seconds_since(store_start);
+      sums.store += vision::seconds_since(store_start);
       const std::int64_t done = index + 1;
       if (done == 100 || done == 200 || done == 500 || done % 1000 == 0)
         samples.emplace_back(done, resident_mib());

@@ -93,6 +93,82 @@ std::optional<detail::Quad> inset_candidate(const detail::Quad& q, const Camera&
   return out;
 }
 
+// A contour inside a detected marker (its inner rim, a code cell) is not
+// another marker: markers do not nest.
+bool inside_a_detection(const std::vector<detail::Quad>& accepted, const detail::Quad& candidate) {
+  const Eigen::Vector2d c = centroid(candidate);
+  return std::any_of(accepted.begin(), accepted.end(),
+                     [&](const detail::Quad& q) { return point_in_quad(q, c); });
+}
+
+// The same marker from another contour (two nested outlines straddling its
+// edge): either centroid inside the other's outline.
+bool overlaps_a_detection(const std::vector<detail::Quad>& accepted, const detail::Quad& outline) {
+  return std::any_of(accepted.begin(), accepted.end(), [&](const detail::Quad& q) {
+    return point_in_quad(q, centroid(outline)) || point_in_quad(outline, centroid(q));
+  });
+}
+
+// The candidate's sub-pixel sides; when they fail, perhaps the outline of a
+// sheet cut just outside a marker, whose edge merged with the marker's in the
+// dilated edge map: the marker inset by the quiet zone is tried instead.
+detail::EdgeFit refine_candidate(const cv::Mat& gray, const Camera& camera,
+                                 const detail::Quad& candidate, const DetectorParameters& p) {
+  detail::EdgeFit fit = detail::refine_quad(gray, camera, candidate, p);
+  if ((fit.status == detail::EdgeFitStatus::kSideNotSupported ||
+       fit.status == detail::EdgeFitStatus::kFitFailed) &&
+      p.sheet_edge_quiet_cells > 0) {
+    if (const auto inner = inset_candidate(candidate, camera, p.sheet_edge_quiet_cells)) {
+      const detail::EdgeFit retry = detail::refine_quad(gray, camera, *inner, p);
+      if (retry.status == detail::EdgeFitStatus::kOk) fit = retry;
+    }
+  }
+  return fit;
+}
+
+// True for a fit that succeeded; otherwise counts why it failed.
+bool count_edge_fit(detail::EdgeFitStatus status, DetectorStats& s) {
+  switch (status) {
+    case detail::EdgeFitStatus::kOk:
+      return true;
+    case detail::EdgeFitStatus::kCutByImageBorder:
+      ++s.cut_by_image_border;
+      return false;
+    case detail::EdgeFitStatus::kSideNotSupported:
+      ++s.side_not_supported;
+      return false;
+    case detail::EdgeFitStatus::kFitFailed:
+      ++s.edge_fit_failed;
+      return false;
+  }
+  return false;
+}
+
+Detection detection_from(const detail::EdgeFit& fit, const detail::Identification& id) {
+  Detection d;
+  d.id = id.id;
+  d.rotation = id.rotation;
+  // The sampled grid has its row 0 along corners 0 -> 1. The observed grid
+  // is the code turned `rotation` quarter turns clockwise, and one clockwise
+  // turn carries the printed top-left corner A to the observed top-right:
+  // A is the candidate's corner `rotation`.
+  for (int k = 0; k < 4; ++k)
+    d.corners_px[k] = fit.corners_px[(k + id.rotation) % 4];
+  d.quality.contrast = id.contrast;
+  d.quality.bits_corrected = id.bits_corrected;
+  d.quality.edge_fit_residual_px = fit.residual_px;
+  return d;
+}
+
+// By id, then by the position of corner A (row, then column).
+void sort_detections(std::vector<Detection>& detections) {
+  std::sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) {
+    if (a.id != b.id) return a.id < b.id;
+    return std::make_pair(a.corners_px[0].y(), a.corners_px[0].x()) <
+           std::make_pair(b.corners_px[0].y(), b.corners_px[0].x());
+  });
+}
+
 }  // namespace
 
 cv::Mat to_gray8(const cv::Mat& image) {
@@ -152,74 +228,27 @@ std::vector<Detection> Detector::detect(const cv::Mat& image, DetectorStats* sta
   const auto candidates = detail::find_quad_candidates(gray, parameters_, &s);
   std::vector<detail::Quad> accepted;  // detected outlines, for suppression
   for (const auto& candidate : candidates) {
-    // A contour inside a detected marker (its inner rim, a code cell) is not
-    // another marker: markers do not nest.
-    const Eigen::Vector2d c = centroid(candidate);
-    if (std::any_of(accepted.begin(), accepted.end(),
-                    [&](const detail::Quad& q) { return point_in_quad(q, c); })) {
+    if (inside_a_detection(accepted, candidate)) {
       ++s.suppressed;
       continue;
     }
-    detail::EdgeFit fit = detail::refine_quad(gray, camera_, candidate, parameters_);
-    if ((fit.status == detail::EdgeFitStatus::kSideNotSupported ||
-         fit.status == detail::EdgeFitStatus::kFitFailed) &&
-        parameters_.sheet_edge_quiet_cells > 0) {
-      // Perhaps the outline of a sheet cut just outside a marker, whose edge
-      // merged with the marker's in the dilated edge map.
-      if (const auto inner =
-              inset_candidate(candidate, camera_, parameters_.sheet_edge_quiet_cells)) {
-        const detail::EdgeFit retry = detail::refine_quad(gray, camera_, *inner, parameters_);
-        if (retry.status == detail::EdgeFitStatus::kOk) fit = retry;
-      }
-    }
-    switch (fit.status) {
-      case detail::EdgeFitStatus::kOk:
-        break;
-      case detail::EdgeFitStatus::kCutByImageBorder:
-        ++s.cut_by_image_border;
-        continue;
-      case detail::EdgeFitStatus::kSideNotSupported:
-        ++s.side_not_supported;
-        continue;
-      case detail::EdgeFitStatus::kFitFailed:
-        ++s.edge_fit_failed;
-        continue;
-    }
+    const detail::EdgeFit fit = refine_candidate(gray, camera_, candidate, parameters_);
+    if (!count_edge_fit(fit.status, s)) continue;
     const auto id = detail::identify(gray, camera_, fit, codebook_, parameters_);
     if (!id) {
       ++s.no_code;
       continue;
     }
-    // The same marker from another contour (two nested outlines straddling
-    // its edge): keep the first, the larger contour.
-    if (std::any_of(accepted.begin(), accepted.end(), [&](const detail::Quad& q) {
-          return point_in_quad(q, centroid(fit.corners_px)) ||
-                 point_in_quad(fit.corners_px, centroid(q));
-        })) {
+    // Keep the first, the larger contour.
+    if (overlaps_a_detection(accepted, fit.corners_px)) {
       ++s.duplicates;
       continue;
     }
     accepted.push_back(fit.corners_px);
-    Detection d;
-    d.id = id->id;
-    d.rotation = id->rotation;
-    // The sampled grid has its row 0 along corners 0 -> 1. The observed grid
-    // is the code turned `rotation` quarter turns clockwise, and one clockwise
-    // turn carries the printed top-left corner A to the observed top-right:
-    // A is the candidate's corner `rotation`.
-    for (int k = 0; k < 4; ++k)
-      d.corners_px[k] = fit.corners_px[(k + id->rotation) % 4];
-    d.quality.contrast = id->contrast;
-    d.quality.bits_corrected = id->bits_corrected;
-    d.quality.edge_fit_residual_px = fit.residual_px;
-    detections.push_back(d);
+    detections.push_back(detection_from(fit, *id));
     ++s.detected;
   }
-  std::sort(detections.begin(), detections.end(), [](const Detection& a, const Detection& b) {
-    if (a.id != b.id) return a.id < b.id;
-    return std::make_pair(a.corners_px[0].y(), a.corners_px[0].x()) <
-           std::make_pair(b.corners_px[0].y(), b.corners_px[0].x());
-  });
+  sort_detections(detections);
   return detections;
 }
 

@@ -114,121 +114,177 @@ double residual_px(const Sample& s, const Line& line) {
   return (line.normal.dot(s.point_norm) - line.offset) * s.jac_normal.norm();
 }
 
-SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2d& n0,
-                 const Eigen::Vector2d& n1, double length_px, bool first_pass,
-                 const DetectorParameters& p, std::vector<double>* profile) {
-  SideFit out;
+// Where a side is read: m samples at t0..t1 of the way from corner n0 to n1
+// (normalized plane), each across the edge over +-half image pixels.
+struct SideSampling {
+  Eigen::Vector2d n0, n1, dn;  // the corners, and the side n1 - n0
+  double t0 = 0, t1 = 1;
+  int m = 0;
+  double half = 0;
+  bool first_pass = false;
+
+  Eigen::Vector2d point(int k) const {
+    const double t = t0 + (t1 - t0) * k / (m - 1);
+    return n0 + t * dn;
+  }
+};
+
+SideSampling plan_side(const Eigen::Vector2d& n0, const Eigen::Vector2d& n1, double length_px,
+                       bool first_pass, const DetectorParameters& p) {
+  SideSampling s;
   const double exclusion = std::min(p.corner_exclusion_px, 0.2 * length_px);
-  const double t0 = exclusion / length_px, t1 = 1 - t0;
+  s.t0 = exclusion / length_px;
+  s.t1 = 1 - s.t0;
   // The first pass only has to find the edge near the contour: it reads a
   // quarter of the samples (each over a wider window); later passes use them all.
   const int max_samples =
       first_pass ? std::max(6, p.max_edge_samples_per_side / 4) : p.max_edge_samples_per_side;
-  const int m = std::clamp(static_cast<int>((t1 - t0) * length_px / p.edge_sample_spacing_px) + 1,
-                           6, max_samples);
-  const double half = first_pass ? p.edge_search_px : p.edge_refine_px;
+  s.m = std::clamp(static_cast<int>((s.t1 - s.t0) * length_px / p.edge_sample_spacing_px) + 1, 6,
+                   max_samples);
+  s.half = first_pass ? p.edge_search_px : p.edge_refine_px;
+  s.first_pass = first_pass;
+  s.n0 = n0;
+  s.n1 = n1;
+  s.dn = n1 - n0;
+  return s;
+}
+
+// The edge on the profile through `px` along `normal` (already read into
+// `profile`): its offset from px along the normal (image pixels) and its
+// step. The first pass takes the strongest dark-to-bright rise, then the
+// equal-area position in a window of edge_refine_px around it. False when no
+// edge is found or the window leaves the image.
+bool locate_edge(const cv::Mat& gray, const Eigen::Vector2d& px, const Eigen::Vector2d& normal,
+                 const SideSampling& side, const DetectorParameters& p,
+                 const std::vector<double>& profile, double* s_edge, double* step) {
+  if (!side.first_pass) return equal_area_edge(profile, -side.half, s_edge, step);
+  int best = 0;
+  double best_d = -1;
+  for (size_t i = 0; i + 1 < profile.size(); ++i) {
+    const double d = profile[i + 1] - profile[i];
+    if (d > best_d) best_d = d, best = static_cast<int>(i);
+  }
+  const double s_peak = -side.half + (best + 0.5) * kProfileStepPx;
+  const Eigen::Vector2d c = px + s_peak * normal;
   const double margin = p.image_border_margin_px;
-  const Eigen::Vector2d dn = n1 - n0;
+  if (!inside_image(gray, c - p.edge_refine_px * normal, margin) ||
+      !inside_image(gray, c + p.edge_refine_px * normal, margin))
+    return false;
+  std::vector<double> window;
+  read_profile(gray, c, normal, p.edge_refine_px, &window);
+  const bool ok = equal_area_edge(window, -p.edge_refine_px, s_edge, step);
+  *s_edge += s_peak;
+  return ok;
+}
 
+// One sample per point of the side: the edge point in the normalized plane,
+// or invalid where no edge is found. kCutByImageBorder when a corner or a
+// profile leaves the image.
+EdgeFitStatus sample_side(const cv::Mat& gray, const Camera& camera, const SideSampling& side,
+                          const DetectorParameters& p, std::vector<double>* profile,
+                          std::vector<Sample>* samples) {
+  const double margin = p.image_border_margin_px;
   // The corners themselves must lie inside, with their search windows.
-  for (const auto& c : {n0, n1})
-    if (!inside_image(gray, camera.distort_normalized(c), margin + half))
-      return out.status = EdgeFitStatus::kCutByImageBorder, out;
-
-  std::vector<Sample> samples(m);
-  for (int k = 0; k < m; ++k) {
-    const double t = t0 + (t1 - t0) * k / (m - 1);
-    const Eigen::Vector2d pn = n0 + t * dn;
+  for (const auto& c : {side.n0, side.n1})
+    if (!inside_image(gray, camera.distort_normalized(c), margin + side.half))
+      return EdgeFitStatus::kCutByImageBorder;
+  samples->assign(side.m, Sample{});
+  for (int k = 0; k < side.m; ++k) {
+    const Eigen::Vector2d pn = side.point(k);
     const Eigen::Vector2d px = camera.distort_normalized(pn);
     const Eigen::Matrix2d j = camera.distort_jacobian(pn);
-    const Eigen::Vector2d tangent = (j * dn).normalized();
+    const Eigen::Vector2d tangent = (j * side.dn).normalized();
     const Eigen::Vector2d normal(tangent.y(), -tangent.x());  // outward for a clockwise quad
-    if (!inside_image(gray, px - half * normal, margin) ||
-        !inside_image(gray, px + half * normal, margin))
-      return out.status = EdgeFitStatus::kCutByImageBorder, out;
-
-    Sample& s = samples[k];
-    read_profile(gray, px, normal, half, profile);
+    if (!inside_image(gray, px - side.half * normal, margin) ||
+        !inside_image(gray, px + side.half * normal, margin))
+      return EdgeFitStatus::kCutByImageBorder;
+    read_profile(gray, px, normal, side.half, profile);
     double s_edge = 0, step = 0;
-    bool ok;
-    if (first_pass) {
-      // Strongest dark-to-bright rise, then the equal-area position in a
-      // window of edge_refine_px around it.
-      int best = 0;
-      double best_d = -1;
-      for (size_t i = 0; i + 1 < profile->size(); ++i) {
-        const double d = (*profile)[i + 1] - (*profile)[i];
-        if (d > best_d) best_d = d, best = static_cast<int>(i);
-      }
-      const double s_peak = -half + (best + 0.5) * kProfileStepPx;
-      const Eigen::Vector2d c = px + s_peak * normal;
-      if (!inside_image(gray, c - p.edge_refine_px * normal, margin) ||
-          !inside_image(gray, c + p.edge_refine_px * normal, margin))
-        continue;
-      std::vector<double> window;
-      read_profile(gray, c, normal, p.edge_refine_px, &window);
-      ok = equal_area_edge(window, -p.edge_refine_px, &s_edge, &step);
-      s_edge += s_peak;
-    } else {
-      ok = equal_area_edge(*profile, -half, &s_edge, &step);
-    }
-    if (!ok) continue;
+    if (!locate_edge(gray, px, normal, side, p, *profile, &s_edge, &step)) continue;
     // Back to the normalized plane through the local Jacobian.
     const Eigen::Matrix2d j_inv = j.inverse();
+    Sample& s = (*samples)[k];
     s.point_norm = pn + j_inv * (s_edge * normal);
-    s.jac_normal = normal;  // replaced below once the line normal is known
+    s.jac_normal = normal;  // replaced once the line normal is known
     s.step = step;
     s.valid = true;
   }
+  return EdgeFitStatus::kOk;
+}
 
-  // Edge strength: relative to the side's typical step (75th percentile), so
-  // that an occluded stretch, whose step vanishes, is not an edge.
+// Edge strength: relative to the side's typical step (75th percentile), so
+// that an occluded stretch, whose step vanishes, is not an edge. False when
+// fewer than three samples found an edge at all.
+bool drop_weak_samples(const DetectorParameters& p, std::vector<Sample>* samples) {
   std::vector<double> steps;
-  for (const auto& s : samples)
+  for (const auto& s : *samples)
     if (s.valid) steps.push_back(s.step);
-  if (steps.size() < 3) return out.status = EdgeFitStatus::kSideNotSupported, out;
+  if (steps.size() < 3) return false;
   const size_t q = steps.size() * 3 / 4;
   std::nth_element(steps.begin(), steps.begin() + q, steps.end());
   const double min_step = std::max(p.min_edge_step, p.min_relative_edge_step * steps[q]);
-  for (auto& s : samples)
+  for (auto& s : *samples)
     if (s.valid && s.step < min_step) s.valid = false;
+  return true;
+}
 
-  // Robust line: fit, drop samples off the line, refit. The first pass starts
-  // from the contour polygon, whose corners may be a few pixels off, so that
-  // samples near a corner can fall beyond the marker: it only needs a line
-  // through most of the side (support 1/2, residual x 2); the occlusion
-  // criteria apply to the dense, re-centred samples of the later passes.
-  const double max_residual = (first_pass ? 2 : 1) * p.max_sample_residual_px;
-  const double min_support = first_pass ? 0.5 : p.min_edge_support;
-  Line line;
+// Robust line: fit, drop samples off the line, refit. The first pass starts
+// from the contour polygon, whose corners may be a few pixels off, so that
+// samples near a corner can fall beyond the marker: it only needs a line
+// through most of the side (residual x 2). False when too few samples remain.
+bool fit_robust_line(const Camera& camera, const SideSampling& side, const DetectorParameters& p,
+                     std::vector<Sample>* samples, Line* line) {
+  const double max_residual = (side.first_pass ? 2 : 1) * p.max_sample_residual_px;
   for (int round = 0; round < 3; ++round) {
-    if (!fit_line(samples, &line)) return out.status = EdgeFitStatus::kSideNotSupported, out;
+    if (!fit_line(*samples, line)) return false;
     // Image length of a unit step along the line normal, per sample.
     bool changed = false;
-    for (int k = 0; k < m; ++k) {
-      Sample& s = samples[k];
+    for (int k = 0; k < side.m; ++k) {
+      Sample& s = (*samples)[k];
       if (!s.valid) continue;
-      const double t = t0 + (t1 - t0) * k / (m - 1);
-      s.jac_normal = camera.distort_jacobian(n0 + t * dn) * line.normal;
-      if (std::abs(residual_px(s, line)) > max_residual) s.valid = false, changed = true;
+      s.jac_normal = camera.distort_jacobian(side.point(k)) * line->normal;
+      if (std::abs(residual_px(s, *line)) > max_residual) s.valid = false, changed = true;
     }
     if (!changed) break;
   }
+  return true;
+}
 
-  // Support and the longest gap (occlusion, a broken outline).
-  int valid = 0, gap = 0, longest_gap = 0;
+// Support and the longest gap (occlusion, a broken outline). The first pass
+// needs half the samples; the occlusion criteria apply to the dense,
+// re-centred samples of the later passes.
+bool side_supported(const std::vector<Sample>& samples, const SideSampling& side, double length_px,
+                    const DetectorParameters& p, int* valid) {
+  int gap = 0, longest_gap = 0;
+  *valid = 0;
   for (const auto& s : samples) {
     if (s.valid) {
-      ++valid;
+      ++*valid;
       gap = 0;
     } else {
       longest_gap = std::max(longest_gap, ++gap);
     }
   }
-  const double spacing = (t1 - t0) * length_px / (m - 1);
-  if (valid < min_support * m || (!first_pass && longest_gap * spacing > p.max_edge_gap_px))
-    return out.status = EdgeFitStatus::kSideNotSupported, out;
+  const double min_support = side.first_pass ? 0.5 : p.min_edge_support;
+  const double spacing = (side.t1 - side.t0) * length_px / (side.m - 1);
+  return !(*valid < min_support * side.m ||
+           (!side.first_pass && longest_gap * spacing > p.max_edge_gap_px));
+}
 
+SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2d& n0,
+                 const Eigen::Vector2d& n1, double length_px, bool first_pass,
+                 const DetectorParameters& p, std::vector<double>* profile) {
+  SideFit out;
+  const SideSampling side = plan_side(n0, n1, length_px, first_pass, p);
+  std::vector<Sample> samples;
+  out.status = sample_side(gray, camera, side, p, profile, &samples);
+  if (out.status != EdgeFitStatus::kOk) return out;
+  out.status = EdgeFitStatus::kSideNotSupported;
+  if (!drop_weak_samples(p, &samples)) return out;
+  Line line;
+  if (!fit_robust_line(camera, side, p, &samples, &line)) return out;
+  int valid = 0;
+  if (!side_supported(samples, side, length_px, p, &valid)) return out;
   out.line = line;
   for (const auto& s : samples)
     if (s.valid) out.sum_sq_residual_px += residual_px(s, line) * residual_px(s, line);

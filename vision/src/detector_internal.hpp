@@ -4,8 +4,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <array>
-#include <cmath>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <optional>
 #include <vector>

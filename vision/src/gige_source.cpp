@@ -4,7 +4,8 @@
 #include <pthread.h>
 #include <sched.h>
 
-#include <cstring>
+#include <atomic>
+#include <cstdio>
 #include <utility>
 
 namespace vision {
@@ -56,6 +57,65 @@ void on_control_lost(ArvDevice* /*device*/, gpointer flag) {
   static_cast<std::atomic<bool>*>(flag)->store(true);
 }
 
+// Throws CaptureError, taking `error`, when the camera refused `what`.
+void check(GError* error, const std::string& who, const std::string& what) {
+  if (error != nullptr) throw CaptureError(who, what + " refused: " + take_message(error));
+}
+
+// The id as Aravis's discovery lists it: vendor-model-serial.
+std::string device_id_of(ArvCamera* camera) {
+  const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
+  const char* model = arv_camera_get_model_name(camera, nullptr);
+  const char* serial = arv_camera_get_device_serial_number(camera, nullptr);
+  return std::string(vendor ? vendor : "") + "-" + (model ? model : "") + "-" +
+         (serial ? serial : "");
+}
+
+// The region of interest the options ask for, the camera's own where they
+// leave a value out.
+void set_region(ArvCamera* camera, const CaptureOptions& o, const std::string& who) {
+  GError* error = nullptr;
+  gint x = 0, y = 0, w = 0, h = 0;
+  arv_camera_get_region(camera, &x, &y, &w, &h, &error);
+  check(error, who, "reading the region");
+  arv_camera_set_region(camera, o.offset_x.value_or(x), o.offset_y.value_or(y), o.width.value_or(w),
+                        o.height.value_or(h), &error);
+  check(error, who,
+        "region " + std::to_string(o.width.value_or(w)) + "x" +
+            std::to_string(o.height.value_or(h)) + "+" + std::to_string(o.offset_x.value_or(x)) +
+            "+" + std::to_string(o.offset_y.value_or(y)));
+}
+
+// Applies the options' features: continuous acquisition, pixel format,
+// region, exposure, gain, and software trigger or free run at a frame rate.
+void configure(ArvCamera* camera, const CaptureOptions& o, const std::string& who) {
+  GError* error = nullptr;
+  arv_camera_set_acquisition_mode(camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
+  check(error, who, "AcquisitionMode=Continuous");
+  arv_camera_set_pixel_format_from_string(camera, o.pixel_format.c_str(), &error);
+  check(error, who, "PixelFormat=" + o.pixel_format);
+  if (o.width || o.height || o.offset_x || o.offset_y) set_region(camera, o, who);
+  if (o.exposure_us) {
+    arv_camera_set_exposure_time(camera, *o.exposure_us, &error);
+    check(error, who, "exposure time " + std::to_string(*o.exposure_us) + " us");
+  }
+  if (o.gain) {
+    arv_camera_set_gain(camera, *o.gain, &error);
+    check(error, who, "gain " + std::to_string(*o.gain));
+  }
+  if (o.software_trigger) {
+    arv_camera_set_trigger(camera, "Software", &error);
+    check(error, who, "software trigger (TriggerMode=On, TriggerSource=Software)");
+  } else {
+    arv_camera_clear_triggers(camera, &error);
+    check(error, who, "free run (TriggerMode=Off)");
+    if (o.frame_rate_hz) {
+      arv_camera_set_frame_rate(camera, *o.frame_rate_hz, &error);
+      check(error, who, "frame rate " + std::to_string(*o.frame_rate_hz) + " Hz");
+    }
+  }
+}
+
 }  // namespace
 
 struct GigeSource::Impl {
@@ -73,6 +133,42 @@ struct GigeSource::Impl {
   bool unreachable = false;
   bool has_last_id = false;
   uint64_t last_id = 0;
+
+  // Connects to `device`; throws CaptureError when no GigE Vision camera answers.
+  void connect(const std::string& device, const std::string& who) {
+    GError* error = nullptr;
+    camera = arv_camera_new(device.c_str(), &error);
+    if (camera == nullptr)
+      throw CaptureError(who, "no GigE Vision camera answers (" + take_message(error) +
+                                  "); `arv-tool-0.8` lists the cameras Aravis can see");
+    if (!arv_camera_is_gv_device(camera)) {
+      g_object_unref(camera);
+      camera = nullptr;
+      throw CaptureError(who, "device is not a GigE Vision camera");
+    }
+  }
+
+  // Creates the stream with the options' buffers and starts acquisition.
+  void start_stream(const CaptureOptions& o, const std::string& who) {
+    GError* error = nullptr;
+    // The plain UDP socket, not Aravis's packet socket (which needs CAP_NET_RAW
+    // and bypasses the socket buffer): the same path whoever runs the rig.
+    arv_camera_gv_set_stream_options(camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
+    realtime = o.realtime_receiver ? 1 : 0;
+    stream = arv_camera_create_stream(camera, on_stream_event, &realtime, &error);
+    check(error, who, "creating the stream");
+    g_object_set(
+        stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED, "socket-buffer-size",
+        o.socket_buffer_bytes, "packet-resend",
+        o.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS : ARV_GV_STREAM_PACKET_RESEND_NEVER,
+        "frame-retention", static_cast<guint>(o.frame_retention_ms) * 1000u, nullptr);
+    const guint payload = arv_camera_get_payload(camera, &error);
+    check(error, who, "reading PayloadSize");
+    for (int i = 0; i < o.n_buffers; ++i)
+      arv_stream_push_buffer(stream, arv_buffer_new_allocate(payload));
+    arv_camera_start_acquisition(camera, &error);
+    check(error, who, "AcquisitionStart");
+  }
 
   // Counts the frames missing between the previous frame id and `id`. GigE
   // Vision 1.x block ids are 16 bits, skip 0 and wrap 65535 -> 1, so they are
@@ -102,15 +198,7 @@ void GigeSource::open() {
   if (impl_) return;
   auto impl = std::make_unique<Impl>();
   const std::string who = name();
-  GError* error = nullptr;
-  impl->camera = arv_camera_new(device_.c_str(), &error);
-  if (impl->camera == nullptr)
-    throw CaptureError(who, "no GigE Vision camera answers (" + take_message(error) +
-                                "); `arv-tool-0.8` lists the cameras Aravis can see");
-  if (!arv_camera_is_gv_device(impl->camera)) {
-    g_object_unref(impl->camera);
-    throw CaptureError(who, "device is not a GigE Vision camera");
-  }
+  impl->connect(device_, who);
   // Closes what was opened so far if a step below throws.
   struct Guard {
     GigeSource* self;
@@ -123,71 +211,11 @@ void GigeSource::open() {
     }
   } guard{this, &impl};
 
-  // The id as Aravis's discovery lists it: vendor-model-serial.
-  const char* vendor = arv_camera_get_vendor_name(impl->camera, nullptr);
-  const char* model = arv_camera_get_model_name(impl->camera, nullptr);
-  const char* serial = arv_camera_get_device_serial_number(impl->camera, nullptr);
-  device_id_ =
-      std::string(vendor ? vendor : "") + "-" + (model ? model : "") + "-" + (serial ? serial : "");
+  device_id_ = device_id_of(impl->camera);
   impl->control_lost_handler = g_signal_connect(arv_camera_get_device(impl->camera), "control-lost",
                                                 G_CALLBACK(on_control_lost), &impl->control_lost);
-
-  auto check = [&](const std::string& what) {
-    if (error != nullptr) throw CaptureError(who, what + " refused: " + take_message(error));
-  };
-  arv_camera_set_acquisition_mode(impl->camera, ARV_ACQUISITION_MODE_CONTINUOUS, &error);
-  check("AcquisitionMode=Continuous");
-  arv_camera_set_pixel_format_from_string(impl->camera, options_.pixel_format.c_str(), &error);
-  check("PixelFormat=" + options_.pixel_format);
-  if (options_.width || options_.height || options_.offset_x || options_.offset_y) {
-    gint x = 0, y = 0, w = 0, h = 0;
-    arv_camera_get_region(impl->camera, &x, &y, &w, &h, &error);
-    check("reading the region");
-    arv_camera_set_region(impl->camera, options_.offset_x.value_or(x),
-                          options_.offset_y.value_or(y), options_.width.value_or(w),
-                          options_.height.value_or(h), &error);
-    check("region " + std::to_string(options_.width.value_or(w)) + "x" +
-          std::to_string(options_.height.value_or(h)) + "+" +
-          std::to_string(options_.offset_x.value_or(x)) + "+" +
-          std::to_string(options_.offset_y.value_or(y)));
-  }
-  if (options_.exposure_us) {
-    arv_camera_set_exposure_time(impl->camera, *options_.exposure_us, &error);
-    check("exposure time " + std::to_string(*options_.exposure_us) + " us");
-  }
-  if (options_.gain) {
-    arv_camera_set_gain(impl->camera, *options_.gain, &error);
-    check("gain " + std::to_string(*options_.gain));
-  }
-  if (options_.software_trigger) {
-    arv_camera_set_trigger(impl->camera, "Software", &error);
-    check("software trigger (TriggerMode=On, TriggerSource=Software)");
-  } else {
-    arv_camera_clear_triggers(impl->camera, &error);
-    check("free run (TriggerMode=Off)");
-    if (options_.frame_rate_hz) {
-      arv_camera_set_frame_rate(impl->camera, *options_.frame_rate_hz, &error);
-      check("frame rate " + std::to_string(*options_.frame_rate_hz) + " Hz");
-    }
-  }
-
-  // The plain UDP socket, not Aravis's packet socket (which needs CAP_NET_RAW
-  // and bypasses the socket buffer): the same path whoever runs the rig.
-  arv_camera_gv_set_stream_options(impl->camera, ARV_GV_STREAM_OPTION_PACKET_SOCKET_DISABLED);
-  impl->realtime = options_.realtime_receiver ? 1 : 0;
-  impl->stream = arv_camera_create_stream(impl->camera, on_stream_event, &impl->realtime, &error);
-  check("creating the stream");
-  g_object_set(impl->stream, "socket-buffer", ARV_GV_STREAM_SOCKET_BUFFER_FIXED,
-               "socket-buffer-size", options_.socket_buffer_bytes, "packet-resend",
-               options_.packet_resend ? ARV_GV_STREAM_PACKET_RESEND_ALWAYS
-                                      : ARV_GV_STREAM_PACKET_RESEND_NEVER,
-               "frame-retention", static_cast<guint>(options_.frame_retention_ms) * 1000u, nullptr);
-  const guint payload = arv_camera_get_payload(impl->camera, &error);
-  check("reading PayloadSize");
-  for (int i = 0; i < options_.n_buffers; ++i)
-    arv_stream_push_buffer(impl->stream, arv_buffer_new_allocate(payload));
-  arv_camera_start_acquisition(impl->camera, &error);
-  check("AcquisitionStart");
+  configure(impl->camera, options_, who);
+  impl->start_stream(options_, who);
 
   guard.armed = false;
   impl_ = std::move(impl);

@@ -81,6 +81,107 @@ Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
   return d.asDiagonal();
 }
 
+// The measurement system at one state and the filter's cost there.
+struct Linearisation {
+  Matrix6d HtH;
+  Vector6d Htr;
+  double cost = 0;
+};
+
+// The filter's MAP cost, which the update minimises:
+//   inv_r |z - h(x)|^2 + (x - x_prior)^T P^-1 (x - x_prior).
+struct MapCost {
+  const Correspondences& c;
+  Vector6d x_prior;
+  Matrix6d prior_information;  // P^-1
+  double inv_r;                // R^-1 = 1 / sigma^2, px^-2
+
+  // False when a point is on or behind the camera.
+  bool evaluate(const Vector6d& state, Linearisation* at) const {
+    double residual_squared = 0;
+    if (!measurement(c, state, &at->HtH, &at->Htr, &residual_squared)) return false;
+    const Vector6d d = state_difference(state, x_prior);
+    at->cost = inv_r * residual_squared + d.dot(prior_information * d);
+    return true;
+  }
+};
+
+MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
+                 const EkfOptions& options) {
+  const Eigen::LDLT<Matrix6d> prior_ldlt(prior_covariance);
+  return {c, state_from_pose(prior), prior_ldlt.solve(Matrix6d::Identity()),
+          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px)};
+}
+
+// Levenberg-Marquardt damping of the Gauss-Newton step and its schedule,
+// carried from one iteration to the next.
+struct Damping {
+  double lambda = 1e-6;
+  double growth = 2;
+};
+
+struct DampedStep {
+  Vector6d step = Vector6d::Zero();  // not finite when the damped system is singular
+  bool accepted = false;             // it lowers the cost; `next` is the state it reaches
+  Linearisation next;
+};
+
+// The least-damped step from x that lowers the cost (`at` is the system at
+// x, `information` and `gradient` the update's). The gain ratio of the actual
+// to the predicted decrease of the cost (the model is cost - 2 s.g + s.I.s)
+// sets the damping by Nielsen's rule (Madsen, Nielsen & Tingleff 2004, eq.
+// 2.21), which stops the zig-zag of full steps across the curved valley
+// between planar poses.
+DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisation& at,
+                       const Matrix6d& information, const Vector6d& gradient, Damping* damping) {
+  DampedStep out;
+  while (damping->lambda <= 1e10) {
+    Matrix6d damped = information;
+    damped.diagonal() *= 1.0 + damping->lambda;
+    out.step = damped.ldlt().solve(gradient);
+    if (!out.step.allFinite()) break;
+    const double predicted = 2 * out.step.dot(gradient) - out.step.dot(information * out.step);
+    if (map.evaluate(x + out.step, &out.next) && out.next.cost <= at.cost && predicted > 0) {
+      const double gain = (at.cost - out.next.cost) / predicted;
+      if (gain > 0) {
+        out.accepted = true;
+        damping->lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2 * gain - 1, 3));
+        damping->growth = 2;
+        break;
+      }
+    }
+    damping->lambda *= damping->growth;
+    damping->growth *= 2;
+  }
+  return out;
+}
+
+// Converged or not, and why, once the iterations have stopped at state x.
+// Consistency gate: a state that explains the corners far worse than the
+// measurement noise allows is a wrong local minimum, not a pose.
+void settle_termination(const Correspondences& c, const Vector6d& x, const EkfOptions& options,
+                        Estimate* e) {
+  if (e->termination == Termination::kConverged) {
+    Matrix6d HtH;
+    Vector6d Htr;
+    double residual_squared = 0;
+    measurement(c, x, &HtH, &Htr, &residual_squared);
+    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(c.size())));
+    if (rms > options.gate_sigmas * options.measurement_sigma_px) {
+      e->message = "converged to a state whose residual (" + std::to_string(rms) +
+                   " px RMS per coordinate) exceeds the gate of " +
+                   std::to_string(options.gate_sigmas) + " measurement sigmas: a local minimum";
+      e->termination = Termination::kLocalMinimum;
+      e->converged = false;
+      return;
+    }
+    e->converged = true;
+  } else if (e->termination == Termination::kMaxIterations) {
+    e->message = "the state was still moving after " + std::to_string(options.max_iterations) +
+                 " iterations";
+  }
+}
+
 }  // namespace
 
 Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
@@ -91,104 +192,47 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   // a 6x6 matrix instead of a 2N x 2N one:
   //   P+ = (P^-1 + H^T R^-1 H)^-1,
   //   x_{i+1} = x_i + P+ (H^T R^-1 (z - h(x_i)) - P^-1 (x_i - x_prior)).
-  const Vector6d x_prior = state_from_pose(prior);
-  const Eigen::LDLT<Matrix6d> prior_ldlt(prior_covariance);
-  const Matrix6d prior_information = prior_ldlt.solve(Matrix6d::Identity());
-  const double inv_r = 1.0 / (options.measurement_sigma_px * options.measurement_sigma_px);
-
   // The update minimises the filter's MAP cost; a Gauss-Newton step that
   // would raise it (a poor start, or the curved valley between the two planar
   // poses) is damped Levenberg-Marquardt style instead of taken: the damped
   // iterated EKF (Bell & Cathey 1993 view the IEKF as Gauss-Newton), same
   // fixed point and posterior covariance.
-  auto evaluate = [&](const Vector6d& state, Matrix6d* HtH, Vector6d* Htr, double* cost) {
-    double residual_squared = 0;
-    if (!measurement(c, state, HtH, Htr, &residual_squared)) return false;
-    const Vector6d d = state_difference(state, x_prior);
-    *cost = inv_r * residual_squared + d.dot(prior_information * d);
-    return true;
-  };
+  const MapCost map = map_cost(c, prior, prior_covariance, options);
   Estimate e;
-  Vector6d x = x_prior;
-  Matrix6d HtH, information = prior_information;
-  Vector6d Htr;
-  double cost = 0, lambda = 1e-6, lambda_growth = 2;
+  Vector6d x = map.x_prior;
+  Matrix6d information = map.prior_information;
+  Linearisation at;
+  Damping damping;
   e.termination = Termination::kMaxIterations;
-  if (!evaluate(x, &HtH, &Htr, &cost)) {
+  if (!map.evaluate(x, &at)) {
     e.termination = Termination::kBehindCamera;
     e.message = "the prior state puts an object point behind the camera";
   }
   for (int it = 1; it <= options.max_iterations && e.termination == Termination::kMaxIterations;
        ++it) {
     e.iterations = it;
-    information = prior_information + inv_r * HtH;
-    const Vector6d gradient = inv_r * Htr - prior_information * state_difference(x, x_prior);
-    Matrix6d next_HtH;
-    Vector6d next_Htr, step = Vector6d::Zero();
-    double next_cost = 0;
-    bool accepted = false;
-    while (lambda <= 1e10) {
-      Matrix6d damped = information;
-      damped.diagonal() *= 1.0 + lambda;
-      step = damped.ldlt().solve(gradient);
-      if (!step.allFinite()) break;
-      // Gain ratio of the actual to the predicted decrease of the cost
-      // (the model is cost - 2 s.g + s.I.s); Nielsen's rule (Madsen, Nielsen
-      // & Tingleff 2004, eq. 2.21) sets the damping from it, which stops the
-      // zig-zag of full steps across the curved valley between planar poses.
-      const double predicted = 2 * step.dot(gradient) - step.dot(information * step);
-      if (evaluate(x + step, &next_HtH, &next_Htr, &next_cost) && next_cost <= cost &&
-          predicted > 0) {
-        const double gain = (cost - next_cost) / predicted;
-        if (gain > 0) {
-          accepted = true;
-          lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2 * gain - 1, 3));
-          lambda_growth = 2;
-          break;
-        }
-      }
-      lambda *= lambda_growth;
-      lambda_growth *= 2;
-    }
-    if (!step.allFinite()) {
+    information = map.prior_information + map.inv_r * at.HtH;
+    const Vector6d gradient =
+        map.inv_r * at.Htr - map.prior_information * state_difference(x, map.x_prior);
+    DampedStep d = damped_step(map, x, at, information, gradient, &damping);
+    if (!d.step.allFinite()) {
       e.termination = Termination::kNumericalFailure;
       e.message = "the measurement update is singular";
       break;
     }
-    if (!accepted && step.allFinite()) step.setZero();
-    if (!accepted || step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
+    if (!d.accepted || d.step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
       // No step lowers the cost any more, or the step is negligible: the
       // minimum, to rounding.
       e.termination = Termination::kConverged;
-      if (accepted) x += step;
+      if (d.accepted) x += d.step;
       break;
     }
-    x += step;
-    cost = next_cost;
-    HtH = next_HtH;
-    Htr = next_Htr;
+    x += d.step;
+    at = d.next;
   }
   e.T_cam_target = pose_from_state(x);
   e.covariance = information.ldlt().solve(Matrix6d::Identity());
-  if (e.termination == Termination::kConverged) {
-    // Consistency gate: a state that explains the corners far worse than the
-    // measurement noise allows is a wrong local minimum, not a pose.
-    double residual_squared = 0;
-    measurement(c, x, &HtH, &Htr, &residual_squared);
-    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(c.size())));
-    if (rms > options.gate_sigmas * options.measurement_sigma_px) {
-      e.message = "converged to a state whose residual (" + std::to_string(rms) +
-                  " px RMS per coordinate) exceeds the gate of " +
-                  std::to_string(options.gate_sigmas) + " measurement sigmas: a local minimum";
-      e.termination = Termination::kLocalMinimum;
-      e.converged = false;
-      return e;
-    }
-    e.converged = true;
-  } else if (e.termination == Termination::kMaxIterations) {
-    e.message = "the state was still moving after " + std::to_string(options.max_iterations) +
-                " iterations";
-  }
+  settle_termination(c, x, options, &e);
   return e;
 }
 

@@ -2,8 +2,10 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <limits>
 
 #include "vision/pose_ippe.hpp"
+#include "vision/pose_jacobian.hpp"
 #include "vision/pose_oi.hpp"
 
 namespace vision {
@@ -26,8 +28,7 @@ Eigen::Matrix3d rotation_from_axis_angle(const Eigen::Vector3d& w) {
 }
 
 // Squared reprojection error (px^2) and, when wanted, the Gauss-Newton system
-// J^T J and J^T r for the parameters (rotation increment w, translation t) of
-// p_cam = exp([w]x) R P + t.
+// J^T J and J^T r for the increments (w, v) of vision/pose_jacobian.hpp.
 double reprojection_system(const Correspondences& c, const Pose& T, Matrix6d* JtJ, Vector6d* Jtr) {
   const Camera& cam = *c.camera;
   double sum = 0;
@@ -35,23 +36,14 @@ double reprojection_system(const Correspondences& c, const Pose& T, Matrix6d* Jt
     JtJ->setZero();
     Jtr->setZero();
   }
+  Eigen::Vector2d px;
+  ProjectionJacobian J;
   for (size_t i = 0; i < c.size(); ++i) {
-    const Eigen::Vector3d RP = T.R * c.object_points[i];
-    const Eigen::Vector3d p = RP + T.t;
-    if (!(p.z() > 0)) return std::numeric_limits<double>::infinity();
-    const Eigen::Vector2d xy = p.head<2>() / p.z();
-    const Eigen::Vector2d r = cam.distort_normalized(xy) - c.image_points_px[i];
+    if (!project_with_jacobian(cam, T, c.object_points[i], &px, JtJ ? &J : nullptr))
+      return std::numeric_limits<double>::infinity();
+    const Eigen::Vector2d r = px - c.image_points_px[i];
     sum += r.squaredNorm();
     if (!JtJ) continue;
-    // d(px)/d(p) = d(px)/d(xy) * d(xy)/d(p); d(p)/dw = -[RP]x; d(p)/dt = I.
-    Eigen::Matrix<double, 2, 3> dxy_dp;
-    dxy_dp << 1 / p.z(), 0, -xy.x() / p.z(), 0, 1 / p.z(), -xy.y() / p.z();
-    const Eigen::Matrix<double, 2, 3> dpx_dp = cam.distort_jacobian(xy) * dxy_dp;
-    Eigen::Matrix3d skew;
-    skew << 0, -RP.z(), RP.y(), RP.z(), 0, -RP.x(), -RP.y(), RP.x(), 0;
-    Eigen::Matrix<double, 2, 6> J;
-    J.leftCols<3>() = -dpx_dp * skew;
-    J.rightCols<3>() = dpx_dp;
     *JtJ += J.transpose() * J;
     *Jtr += J.transpose() * r;
   }

@@ -1,7 +1,7 @@
 #include "vision/pose_solver.hpp"
 
 #include <chrono>
-#include <cmath>
+#include <limits>
 
 namespace vision {
 

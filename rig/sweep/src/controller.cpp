@@ -16,15 +16,12 @@
 #include "motion/errors.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "run_log.hpp"
+#include "vision/timing.hpp"
 
 namespace rig::sweep {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::int64_t ns_since_epoch(std::chrono::system_clock::time_point t) {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(t.time_since_epoch()).count();
@@ -60,7 +57,7 @@ class FaultHandler {
     log_.set_state("paused");
     const auto pause_start = Clock::now();
     const bool go_on = control_.wait_while_paused();
-    log_.add_paused(seconds_since(pause_start));
+    log_.add_paused(vision::seconds_since(pause_start));
     if (!go_on) return false;
     log_.event("resume", "resumed", index);
     log_.set_state("running");
@@ -172,10 +169,10 @@ class PositionMeasurer {
       try {
         const auto move_start = Clock::now();
         bench_.move_to(p.x_mm, p.y_mm);
-        const double move_s = seconds_since(move_start);
+        const double move_s = vision::seconds_since(move_start);
         const auto settle_start = Clock::now();
         const motion::BenchStatus status = bench_.wait_settled(config_.settle.timeout);
-        const double settle_s = seconds_since(settle_start);
+        const double settle_s = vision::seconds_since(settle_start);
         rec.stage_times.push_back({"move", move_s});
         rec.stage_times.push_back({"settle", settle_s});
         return {status, move_s + settle_s};
@@ -211,7 +208,7 @@ class PositionMeasurer {
       } catch (const vision::CaptureError& e) {
         throw PositionFailure{"camera", e.what()};
       }
-      rec.stage_times.push_back({"capture", seconds_since(capture_start)});
+      rec.stage_times.push_back({"capture", vision::seconds_since(capture_start)});
       const std::string unverified = unverified_reason(status.position);
       if (unverified.empty()) return frames;
       if (attempt >= config_.capture.retries) throw PositionFailure{"settle", unverified};
@@ -423,8 +420,8 @@ struct Controller::Impl {
     // the whole append, commit included, goes to telemetry.
     const auto store_start = Clock::now();
     store.append_position(run_id, rec);
-    rec.stage_times.push_back({"store_commit", seconds_since(store_start)});
-    log.count_stored(seconds_since(started));
+    rec.stage_times.push_back({"store_commit", vision::seconds_since(store_start)});
+    log.count_stored(vision::seconds_since(started));
     log.publish(log.position_message(rec));
     if (rec.status == db::store::PositionStatus::kOk) {
       ++outcome.positions_ok;
@@ -469,7 +466,7 @@ struct Controller::Impl {
                  {"positions_failed", outcome.positions_failed},
                  {"stored", outcome.stored_total},
                  {"plan_size", plan.size()},
-                 {"elapsed_s", seconds_since(started)}});
+                 {"elapsed_s", vision::seconds_since(started)}});
   }
 };
 

@@ -1,10 +1,10 @@
 #include "rig/sweep/ground_truth.hpp"
 
-#include <Eigen/Geometry>
 #include <cmath>
 #include <string>
 
 #include "vision/cramer_rao.hpp"
+#include "vision/pose_jacobian.hpp"
 
 namespace rig::sweep {
 namespace {
@@ -33,32 +33,22 @@ bool project_corners(const vision::Camera& camera, const vision::Target& target,
 }
 
 // Bound on sd(distance) for 1 px corner noise: the pose perturbed as
-// R' = exp([w]x) R, t' = t + v; the Jacobian of the projected corners in
-// (w, v) by central differences (steps far above rounding, far below the
-// curvature scale of a projection: 1e-7 rad and 1e-7 m); d|t|/d(w, v) =
-// (0, t/|t|).
+// R' = exp([w]x) R, t' = t + v, the analytic Jacobian of the projected corners
+// in (w, v) (vision/pose_jacobian.hpp); d|t|/d(w, v) = (0, t/|t|).
 std::optional<double> distance_bound(const vision::Camera& camera, const vision::Target& target,
                                      const std::vector<int>& ids, const vision::Pose& pose) {
-  Eigen::VectorXd centre;
-  if (ids.empty() || !project_corners(camera, target, ids, pose, centre)) return std::nullopt;
-  vision::PoseJacobian J(centre.size(), 6);
-  const double h = 1e-7;
-  for (int k = 0; k < 6; ++k) {
-    vision::Pose plus = pose, minus = pose;
-    Eigen::Vector3d delta = Eigen::Vector3d::Zero();
-    delta(k % 3) = h;
-    if (k < 3) {
-      plus.R = Eigen::AngleAxisd(h, delta / h).toRotationMatrix() * pose.R;
-      minus.R = Eigen::AngleAxisd(-h, delta / h).toRotationMatrix() * pose.R;
-    } else {
-      plus.t += delta;
-      minus.t -= delta;
+  if (ids.empty()) return std::nullopt;
+  vision::PoseJacobian J(8 * static_cast<Eigen::Index>(ids.size()), 6);
+  Eigen::Index row = 0;
+  for (int id : ids) {
+    for (const auto& corner : target.corners_m(id)) {
+      Eigen::Vector2d px;
+      vision::ProjectionJacobian corner_rows;
+      if (!vision::project_with_jacobian(camera, pose, corner, &px, &corner_rows))
+        return std::nullopt;
+      J.middleRows<2>(row) = corner_rows;
+      row += 2;
     }
-    Eigen::VectorXd a, b;
-    if (!project_corners(camera, target, ids, plus, a) ||
-        !project_corners(camera, target, ids, minus, b))
-      return std::nullopt;
-    J.col(k) = (a - b) / (2 * h);
   }
   vision::PoseGradient g = vision::PoseGradient::Zero();
   g.tail<3>() = pose.t / pose.t.norm();

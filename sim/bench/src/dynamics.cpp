@@ -1,4 +1,4 @@
-// Mechanics of the simulated bench (see bench_dynamics.hpp).
+// Mechanics of the simulated bench (see sim/bench/dynamics.hpp).
 #include "sim/bench/dynamics.hpp"
 
 #include <algorithm>

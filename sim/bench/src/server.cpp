@@ -1,4 +1,4 @@
-// The simulated bench's Modbus server (see bench_server.hpp).
+// The simulated bench's Modbus server (see sim/bench/server.hpp).
 #include "sim/bench/server.hpp"
 
 #include <modbus/modbus.h>
@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <cmath>
 #include <cstring>
 #include <stdexcept>
 

@@ -1,4 +1,4 @@
-// Clutter and occluders (see scene_disturbances.hpp).
+// Clutter and occluders (see disturbances.hpp).
 #include "disturbances.hpp"
 
 #include <algorithm>

@@ -2,7 +2,6 @@
 #pragma once
 
 #include <Eigen/Core>
-#include <cstdint>
 #include <opencv2/core.hpp>
 #include <random>
 #include <vector>

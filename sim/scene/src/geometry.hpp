@@ -14,7 +14,7 @@ namespace sim::scene::detail {
 // sheet, `background` (CV_32FC1, or empty for the uniform
 // options.background_reflectance) where the sheet is not) into `radiance`
 // (CV_32FC1). `front` is drawn when the printed side faces the camera, `back`
-// otherwise. Area-correct: see sim/scene_renderer.hpp, steps 1-3.
+// otherwise. Area-correct: see sim/scene/renderer.hpp, steps 1-3.
 void accumulate_radiance(const RayTable& rays, const SheetArtwork& front, const SheetArtwork& back,
                          const SceneOptions& options, const vision::Pose& T_cam_target,
                          const cv::Mat& background, float weight, cv::Mat& radiance);

@@ -1,4 +1,4 @@
-// Per-pixel ray table (see scene_rays.hpp).
+// Per-pixel ray table (see rays.hpp).
 #include "rays.hpp"
 
 #include <Eigen/LU>

@@ -1,7 +1,7 @@
-// sim::scene::SceneRenderer (see sim/scene_renderer.hpp): orchestration, geometry
-// stage and ground truth. The artwork integrals, the ray table, the sensor and
-// the disturbances live in scene_sheet, scene_rays, scene_sensor and
-// scene_disturbances.
+// sim::scene::SceneRenderer (see sim/scene/renderer.hpp): orchestration and
+// ground truth. The geometry stage, the artwork integrals, the ray table, the
+// sensor and the disturbances live in geometry, sheet, rays, sensor and
+// disturbances (.hpp/.cpp beside this file).
 #include "sim/scene/renderer.hpp"
 
 #include <Eigen/Geometry>

@@ -1,4 +1,4 @@
-// Sensor noise and quantization (see scene_sensor.hpp).
+// Sensor noise and quantization (see sensor.hpp).
 #include "sensor.hpp"
 
 #include <algorithm>

@@ -1,8 +1,7 @@
-// Exact box integrals over the printed sheet (see scene_sheet.hpp).
+// Exact box integrals over the printed sheet (see sheet.hpp).
 #include "sheet.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <stdexcept>
 #include <string>
 

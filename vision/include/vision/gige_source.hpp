@@ -18,7 +18,6 @@
 // thread fills the buffers. Not thread-safe: one thread drives a source.
 #pragma once
 
-#include <atomic>
 #include <memory>
 #include <string>
 
@@ -45,7 +44,8 @@ class GigeSource final : public FrameSource {
   std::string name() const override { return "gige:" + device_; }
   CaptureCounters counters() const override { return counters_; }
 
-  // After open(): the camera's device id and address as Aravis reports them.
+  // After open(): the camera's device id as Aravis's discovery lists it
+  // (vendor-model-serial).
   const std::string& device_id() const { return device_id_; }
   // After open(): whether the receiving thread got real-time scheduling
   // (CaptureOptions::realtime_receiver).

@@ -3,10 +3,11 @@
 // isotropic Gaussian corner noise (Hartley & Zisserman 2004, §A6.2; More 1978
 // for the damping schedule). The reference optimum the others are measured by.
 //
-// Parameters: a rotation increment (axis-angle, left-multiplied) and the
-// translation. Started from the best (lowest reprojection error) of the
-// solvers that can start it: IPPE's better solution (both when they are nearly
-// ambiguous), the hint, and hybrid_oi's when IPPE fails.
+// Parameters: a rotation increment (axis-angle, left-multiplied) and a
+// translation increment, with the analytic Jacobian of
+// vision/pose_jacobian.hpp. Started from the best (lowest reprojection error)
+// of the solvers that can start it: IPPE's better solution (both when they
+// are nearly ambiguous), the hint, and hybrid_oi's when IPPE fails.
 #pragma once
 
 #include "vision/pose_solver.hpp"
