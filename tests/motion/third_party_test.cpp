@@ -43,7 +43,10 @@ std::string mbpoll(int port, const std::string& args) {
   return out;
 }
 
-// Polls `done` every 5 ms for up to `timeout`.
+// Polls `done` every 5 ms for up to `timeout`. It returns as soon as `done`
+// holds (moves here take a fraction of a second), so kEventually only bounds
+// a broken test, with room for a loaded host or a sanitizer build.
+constexpr auto kEventually = 20s;
 template <class Pred>
 bool eventually(Pred done, std::chrono::milliseconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
@@ -70,17 +73,17 @@ TEST_F(Mbpoll, HomesMovesAndReadsBackTheSimulatedBench) {
   start_server();
   const int port = server_->port();
   mbpoll(port, "-r 5 -t 4 127.0.0.1 -- 2");  // command: home
-  ASSERT_TRUE(eventually([&] { return server_->encoder_position_mm().x_mm == 0; }, 3s));
+  ASSERT_TRUE(eventually([&] { return server_->encoder_position_mm().x_mm == 0; }, kEventually));
   mbpoll(port, "-r 0 -t 4:int -B 127.0.0.1 -- 12345 -6789");  // targets, µm
   mbpoll(port, "-r 4 -t 4 127.0.0.1 -- 50 1");                // speed 50 mm/s, command: move
   // -6789 µm is outside the sim's Y travel (-5 mm): alarm 1, no motion.
-  ASSERT_TRUE(
-      eventually([&] { return mbpoll_values(mbpoll(port, "-r 5 -t 3 127.0.0.1"))[5] == 1; }, 2s));
+  ASSERT_TRUE(eventually([&] { return mbpoll_values(mbpoll(port, "-r 5 -t 3 127.0.0.1"))[5] == 1; },
+                         kEventually));
   mbpoll(port, "-r 4 -t 4 127.0.0.1 -- 50 4");  // reset alarm
   mbpoll(port, "-r 0 -t 4:int -B 127.0.0.1 -- 12345 -4321");
   mbpoll(port, "-r 4 -t 4 127.0.0.1 -- 50 1");
   ASSERT_TRUE(eventually(
-      [&] { return std::fabs(server_->encoder_position_mm().y_mm + 4.321) < 1e-9; }, 3s));
+      [&] { return std::fabs(server_->encoder_position_mm().y_mm + 4.321) < 1e-9; }, kEventually));
   auto feedback = mbpoll_values(mbpoll(port, "-r 0 -t 3:int -B -c 2 127.0.0.1"));
   EXPECT_EQ(feedback[0], 12345);
   EXPECT_EQ(feedback[2], -4321);
@@ -89,7 +92,7 @@ TEST_F(Mbpoll, HomesMovesAndReadsBackTheSimulatedBench) {
         // status bits: homed (0) and in position (2)
         return mbpoll_values(mbpoll(port, "-r 4 -t 3 127.0.0.1"))[4] == 0b101;
       },
-      2s));
+      kEventually));
 }
 
 // The emulator is a Python process; it prints "PORT n" once it listens.
@@ -98,7 +101,7 @@ class PymodbusDrive : public ::testing::Test {
   void SetUp() override {
     drive_ = std::make_unique<ChildProcess>(std::vector<std::string>{
         "/usr/bin/python3", std::string(RIG_SOURCE_DIR) + "/tests/motion/pymodbus_drive.py", "0"});
-    const auto line = drive_->read_line(10s);
+    const auto line = drive_->read_line(kEventually);
     ASSERT_TRUE(line && line->rfind("PORT ", 0) == 0)
         << "pymodbus emulator did not start (python3-pymodbus installed?)";
     port_ = std::stoi(line->substr(5));
@@ -171,7 +174,7 @@ class RtuOverPty : public SimBenchTest {
           return stat((dir_ + "/bench").c_str(), &st) == 0 &&
                  stat((dir_ + "/driver").c_str(), &st) == 0;
         },
-        5s))
+        kEventually))
         << "socat made no pty pair";
   }
   void TearDown() override {

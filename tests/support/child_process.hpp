@@ -83,18 +83,27 @@ class ChildProcess {
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
           deadline - std::chrono::steady_clock::now());
       if (left.count() <= 0) return std::nullopt;
+      if (eof_) return std::nullopt;
       pollfd p{out_, POLLIN, 0};
       if (poll(&p, 1, static_cast<int>(left.count())) <= 0) return std::nullopt;
       char chunk[512];
       const ssize_t n = ::read(out_, chunk, sizeof chunk);
-      if (n <= 0) return std::nullopt;
+      if (n <= 0) {
+        eof_ = true;
+        return std::nullopt;
+      }
       buffer_.append(chunk, static_cast<size_t>(n));
     }
   }
 
+  // Whether the child's stdout ended (it exited or closed it): no line will
+  // come after the ones already read.
+  bool at_eof() const { return eof_ && buffer_.find('\n') == std::string::npos; }
+
  private:
   pid_t pid_ = -1;
   int out_ = -1;
+  bool eof_ = false;
   std::string buffer_;
 };
 

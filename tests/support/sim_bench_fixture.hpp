@@ -18,11 +18,15 @@ inline std::string sim_profile_path() {
   return std::string(RIG_SOURCE_DIR) + "/config/benches/sim.toml";
 }
 
-// The shipped map with test timings: a 50 ms response timeout and a 1.5 s
-// reconnect window keep the link-fault tests short.
+// The shipped map with test timings. A loopback transaction takes
+// microseconds, so with a 1 s response timeout only a fault injected on
+// purpose times out, never a reply the loaded host or a sanitizer build was
+// slow to send (a spurious timeout would add a reconnect, and repeat a write
+// whose fault the server had already spent). A 1.5 s reconnect window keeps
+// the link-fault tests short.
 inline motion::DriveProfile test_profile() {
   motion::DriveProfile p = motion::load_drive_profile(sim_profile_path());
-  p.timing.response_timeout_ms = 50;
+  p.timing.response_timeout_ms = 1000;
   p.timing.reconnect_timeout_ms = 1500;
   return p;
 }

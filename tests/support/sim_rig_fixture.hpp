@@ -40,7 +40,12 @@ struct SweepFileOptions {
   int max_consecutive_failed = 5;
   std::string calibration;  // "" = the paper camera
   std::string extra_capture;
-  int telemetry_port = 5656;  // publish; control is +1
+  // Telemetry endpoints. Ports chosen at bind time by default, so that no
+  // test needs a fixed port to be free; the sweep prints the ports on its
+  // first line. Two loopback addresses: the sweep refuses two identical
+  // endpoints, even when both ports are chosen at bind time.
+  std::string telemetry_publish = "tcp://127.0.0.1:*";
+  std::string telemetry_control = "tcp://127.0.0.2:*";
 };
 
 class SimRig {
@@ -94,8 +99,8 @@ class SimRig {
         << "\n\n[target]\nlayout = \"" << repo_path("config/targets/paper.toml")
         << "\"\n\n[rig]\nfile = \"" << repo_path("config/rigs/sim.toml")
         << "\"\n\n[database]\npath = \"" << database()
-        << "\"\ndurable_commits = true\n\n[telemetry]\npublish = \"tcp://127.0.0.1:"
-        << o.telemetry_port << "\"\ncontrol = \"tcp://127.0.0.1:" << o.telemetry_port + 1 << "\"\n";
+        << "\"\ndurable_commits = true\n\n[telemetry]\npublish = \"" << o.telemetry_publish
+        << "\"\ncontrol = \"" << o.telemetry_control << "\"\n";
     return file(name);
   }
 

@@ -3,6 +3,7 @@
 #include "vision/camera.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -88,8 +89,9 @@ TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
 class CalibrationFiles : public ::testing::Test {
  protected:
   void SetUp() override {
+    // Process id and test name: no other test process writes this folder.
     dir_ = fs::temp_directory_path() /
-           ("rig_calib_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) + "_" +
+           ("rig_calib_" + std::to_string(::getpid()) + "_" +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::create_directories(dir_);
   }

@@ -37,8 +37,10 @@ TEST(CramerRaoBound, IsAttainedByLeastSquaresOnALinearGaussianModel) {
   // is unbiased with covariance exactly sigma^2 (J^T J)^-1, so the sample
   // covariance over M trials must match the bound. A sample variance has
   // relative standard deviation sqrt(2 / (M - 1)) = 1 % for M = 20000; the
-  // 5 % tolerance is 5 of those (checked on the diagonal and on a scalar
-  // function, the distance-like g = (0, 0, 0, 0.2, 0.3, 0.9)).
+  // 5.5 % tolerance is 5.5 of those (checked on the diagonal and on a scalar
+  // function, the distance-like g = (0, 0, 0, 0.2, 0.3, 0.9)). The draws come
+  // from a fixed seed (measured: within 1.1 %); another seed would fail one
+  // of the seven checks with probability below 7 x 3.8e-8 = 2.7e-7.
   std::mt19937_64 rng(20260307);
   std::normal_distribution<double> normal(0.0, 1.0);
   const int rows = 16;  // 8 corners
@@ -68,9 +70,9 @@ TEST(CramerRaoBound, IsAttainedByLeastSquaresOnALinearGaussianModel) {
   const PoseGradient mean = sum / trials;
   const PoseCovariance cov = (sum_outer - trials * mean * mean.transpose()) / (trials - 1);
   for (int i = 0; i < 6; ++i) {
-    EXPECT_NEAR(cov(i, i) / bound(i, i), 1.0, 0.05) << "parameter " << i;
+    EXPECT_NEAR(cov(i, i) / bound(i, i), 1.0, 0.055) << "parameter " << i;
   }
-  EXPECT_NEAR(g.dot(cov * g) / vision::cramer_rao_bound(bound, g), 1.0, 0.05);
+  EXPECT_NEAR(g.dot(cov * g) / vision::cramer_rao_bound(bound, g), 1.0, 0.055);
 }
 
 TEST(CramerRaoBound, RejectsAJacobianThatLeavesAParameterUnobservable) {

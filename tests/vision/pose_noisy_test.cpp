@@ -3,8 +3,13 @@
 // camera with distortion), compared with opencv_ippe_square on the same
 // problems. The statistics of the comparison are paired: each problem is
 // solved by every solver, and a difference of means is judged against the
-// standard error of the per-problem differences (3 SE: a 0.3 % false alarm
-// rate per comparison under normality).
+// standard error of the per-problem differences, at kStandardErrors.
+//
+// The problems come from a fixed seed, so every run sees the same numbers
+// (measured: |z| <= 1.7 between solvers of equal accuracy, >= 22 for the
+// poor ones). 5.5 standard errors would be passed by chance, under
+// normality, with probability 1.9e-8 one-sided and 3.8e-8 two-sided: below
+// 1e-6 over the ten comparisons with any other seed.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -20,6 +25,7 @@ namespace {
 
 constexpr int kProblems = 1000;
 constexpr double kNoisePx = 0.5;
+constexpr double kStandardErrors = 5.5;
 
 struct Results {
   std::vector<std::string> names;
@@ -114,17 +120,17 @@ TEST(PoseSolversNoisy, IppeMatchesOpenCvIppeSquare) {
   // mean error beyond the sample's statistical noise.
   const auto& r = results();
   const Paired d = paired(r.error.at("ippe"), r.error.at("opencv_ippe_square"));
-  EXPECT_LT(std::abs(d.mean_difference), 3 * d.standard_error + 1e-12);
+  EXPECT_LT(std::abs(d.mean_difference), kStandardErrors * d.standard_error + 1e-12);
 }
 
 TEST(PoseSolversNoisy, LmIsNotWorseThanAnyOtherSolver) {
   // lm is the maximum-likelihood estimate under this noise model; no solver
-  // may beat it by more than 3 standard errors of the paired difference.
+  // may beat it by more than kStandardErrors of the paired difference.
   const auto& r = results();
   for (const auto& name : r.names) {
     if (name == "lm") continue;
     const Paired d = paired(r.error.at("lm"), r.error.at(name));
-    EXPECT_LT(d.mean_difference, 3 * d.standard_error) << "lm vs " << name;
+    EXPECT_LT(d.mean_difference, kStandardErrors * d.standard_error) << "lm vs " << name;
   }
 }
 

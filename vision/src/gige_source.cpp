@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cstdio>
 #include <utility>
@@ -133,6 +134,8 @@ struct GigeSource::Impl {
   bool unreachable = false;
   bool has_last_id = false;
   uint64_t last_id = 0;
+  // Frames seen since last_id whose id is unknown (id 0, see note_frame_id).
+  uint64_t without_id = 0;
 
   // Connects to `device`; throws CaptureError when no GigE Vision camera answers.
   void connect(const std::string& device, const std::string& who) {
@@ -172,18 +175,25 @@ struct GigeSource::Impl {
 
   // Counts the frames missing between the previous frame id and `id`. GigE
   // Vision 1.x block ids are 16 bits, skip 0 and wrap 65535 -> 1, so they are
-  // compared modulo 65535; extended (64-bit) ids compare directly.
+  // compared modulo 65535; extended (64-bit) ids compare directly. Id 0 is
+  // no id: Aravis gives it to a frame whose leader packet was lost. Such a
+  // frame did arrive (incomplete), so it fills one place in the next gap.
   void note_frame_id(uint64_t id, CaptureCounters& counters) {
+    if (id == 0) {
+      ++without_id;
+      return;
+    }
     if (has_last_id) {
       uint64_t step = 0;
       if (id <= 0xFFFF && last_id <= 0xFFFF)
         step = (id + 65535 - last_id) % 65535;
       else if (id > last_id)
         step = id - last_id;
-      if (step > 1) counters.lost += step - 1;
+      if (step > 1) counters.lost += step - 1 - std::min(step - 1, without_id);
     }
     has_last_id = true;
     last_id = id;
+    without_id = 0;
   }
 };
 

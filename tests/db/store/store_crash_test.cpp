@@ -5,9 +5,11 @@
 // exactly 0 .. n-1 (no gap, no duplicate, nothing committed lost), and a new
 // writer must continue from first_incomplete_position.
 //
-// The kill moments are random but the assertions are not timed: whatever
-// instant the kill lands on (opening, WAL recovery, between positions, inside
-// a transaction, during COMMIT), the same properties must hold.
+// The kill moments are drawn from a fixed seed, so every run asks for the
+// same delays; where the kill actually lands still depends on the machine's
+// speed, and the assertions are not timed: whatever instant it lands on
+// (opening, WAL recovery, between positions, inside a transaction, during
+// COMMIT), the same properties must hold.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sqlite3.h>
@@ -152,9 +154,7 @@ TEST(StoreCrash, KeepsEveryCommittedPositionWholeAcrossRepeatedSigkill) {
     db::store::Store store(path);
     run = store.start_run(db_test::make_run_description(1'000'000));
   }
-  const unsigned seed = std::random_device{}();
-  SCOPED_TRACE("seed " + std::to_string(seed));
-  std::mt19937 random(seed);
+  std::mt19937 random(20260611);
 
   constexpr int kKills = 12;
   CrashTally tally;
@@ -164,7 +164,8 @@ TEST(StoreCrash, KeepsEveryCommittedPositionWholeAcrossRepeatedSigkill) {
     ASSERT_NO_FATAL_FAILURE(kill_a_writer(path, run, kill_number, random, announced));
     ASSERT_NO_FATAL_FAILURE(check_after_kill(path, run, announced, tally));
   }
-  // The kills did interrupt a writer that was making progress.
+  // The kills did interrupt a writer that was making progress: not timed,
+  // since a round that read a second announcement killed after a commit.
   EXPECT_GE(tally.rounds_that_added, 1);
   RecordProperty("kills_inside_an_append", tally.kills_inside_an_append);
   RecordProperty("positions_before_resume", static_cast<int>(tally.stored));

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <random>
+#include <regex>
 #include <set>
 #include <string>
 #include <thread>
@@ -34,14 +35,37 @@ std::unique_ptr<ChildProcess> start_sweep(const std::vector<std::string>& extra)
   return child;
 }
 
+// Waits for a line of the child's containing `needle`: false after `timeout`
+// or once the child's output has ended.
 bool wait_for_line(ChildProcess& child, const std::string& needle, std::chrono::seconds timeout) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (std::chrono::steady_clock::now() < deadline) {
+  while (std::chrono::steady_clock::now() < deadline && !child.at_eof()) {
     const auto line = child.read_line(200ms);
     if (line && line->find(needle) != std::string::npos) return true;
   }
   return false;
 }
+
+// The telemetry endpoints a sweep bound (ports chosen at bind time), from its
+// first line: "rig sweep: run N in ..., telemetry tcp://127.0.0.1:P, control
+// tcp://127.0.0.1:Q". Empty if that line did not come.
+struct SweepEndpoints {
+  std::string publish, control;
+};
+SweepEndpoints wait_for_endpoints(ChildProcess& child, std::chrono::seconds timeout) {
+  static const std::regex kEndpoints(R"(telemetry (tcp://[^,\s]+), control (tcp://\S+))");
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline && !child.at_eof()) {
+    const auto line = child.read_line(200ms);
+    std::smatch m;
+    if (line && std::regex_search(*line, m, kEndpoints)) return {m[1], m[2]};
+  }
+  return {};
+}
+
+// Control requests are answered within milliseconds; the wait only bounds a
+// broken test.
+constexpr auto kControlWait = 10000ms;
 
 // Waits for the child to exit by itself; returns its exit status.
 int wait_exit(ChildProcess& child, std::chrono::seconds timeout) {
@@ -128,40 +152,55 @@ TEST(SweepEndToEnd, ResumesAfterKill9AtRandomMomentsWithoutLossOrDuplicate) {
   SimRig rig(2.0);
   SweepFileOptions o;
   o.plan = "kind = \"grid\"\nx_mm = [400.0, 875.0, 25.0]\ny_mm = [150.0, 150.0, 10.0]\n";
-  const std::string sweep = rig.write_sweep(o);  // 20 positions, about 0.3 s each here
+  const std::string sweep = rig.write_sweep(o);  // 20 positions
+  // Six sessions, each SIGKILLed a seeded 0-300 ms after an event it reports,
+  // so that a slow host and a fast one see the same story. Four die after
+  // storing their first or second new position: a position takes at least
+  // 0.3 s here (a 25 mm move at time scale 2), so the kill falls inside the
+  // next position's cycle (move, settle, capture, solve or store, wherever
+  // its stages end on this host). Two die after announcing the run, while
+  // resuming. A session of the first kind adds one or two positions, plus
+  // at most the one in progress; one of the second kind at most one: at most
+  // 4 x 3 + 2 x 1 = 14 of the 20, so the run is unfinished at every kill.
   std::mt19937 random(20261122);
-  // Kills land anywhere in a position's cycle (move, settle, capture, solve,
-  // store): uniform over 0.2-1.2 s after the run is announced, several
-  // positions' worth, so successive kills fall in different stages.
-  std::uniform_int_distribution<int> delay_ms(200, 1200);
+  std::uniform_int_distribution<int> new_positions(1, 2), delay_ms(0, 300);
+  long long stored = 0;
   std::set<long long> seen_counts;
-  int kills = 0;
-  for (; kills < 6; ++kills) {
+  for (int kill = 0; kill < 6; ++kill) {
+    SCOPED_TRACE("kill " + std::to_string(kill));
     std::vector<std::string> args = {sweep};
-    if (kills > 0) args = {sweep, "--resume", "1"};
+    if (kill > 0) args = {sweep, "--resume", "1"};
     auto child = start_sweep(args);
-    ASSERT_TRUE(wait_for_line(*child, "rig sweep: run 1", 60s)) << "kill " << kills;
+    const bool while_resuming = kill % 3 == 2;
+    const std::string event =
+        while_resuming ? "rig sweep: run 1"
+                       : "position " + std::to_string(stored + new_positions(random) - 1) + " (";
+    ASSERT_TRUE(wait_for_line(*child, event, 120s)) << "no line with \"" << event << "\"";
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(random)));
     child->signal_and_wait(SIGKILL, 10s);
     SqlProbe db(rig.database());
     expect_positions_whole(db, 2);
-    const long long stored = db.count("SELECT count(*) FROM positions");
-    EXPECT_EQ(db.count("SELECT count(DISTINCT plan_index) FROM positions"), stored);
+    const long long now_stored = db.count("SELECT count(*) FROM positions");
+    EXPECT_EQ(db.count("SELECT count(DISTINCT plan_index) FROM positions"), now_stored);
+    EXPECT_NE(db.value("SELECT status FROM runs"), "completed");
+    if (while_resuming) {
+      EXPECT_GE(now_stored, stored);
+    } else {
+      EXPECT_GT(now_stored, stored);
+    }
+    stored = now_stored;
     seen_counts.insert(stored);
-    if (db.value("SELECT status FROM runs") == "completed") break;
   }
-  EXPECT_GE(kills, 5) << "the run finished before five kills; slow the rig down";
-  if (SqlProbe(rig.database()).value("SELECT status FROM runs") != "completed") {
-    auto last = start_sweep({sweep, "--resume", "1"});
-    EXPECT_EQ(wait_exit(*last, 120s), 0);
-  }
+  auto last = start_sweep({sweep, "--resume", "1"});
+  EXPECT_EQ(wait_exit(*last, 120s), 0);
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(DISTINCT plan_index) FROM positions"), 20);
   EXPECT_EQ(db.count("SELECT count(*) FROM positions"), 20);
   expect_positions_whole(db, 2);
-  // The kills interrupted the run at several different points.
-  EXPECT_GE(seen_counts.size(), 3u);
+  // The kills interrupted the run at several different points: each session
+  // killed after a position it stored left a larger count.
+  EXPECT_GE(seen_counts.size(), 4u);
 }
 
 TEST(SweepEndToEnd, SigintFinishesThePositionAbortsTheRunAndResumeCompletesIt) {
@@ -194,8 +233,10 @@ TEST(SweepEndToEnd, ABenchAlarmPausesTheSweepUntilResumedThenItCompletes) {
   sim::bench::FaultPlan faults;
   faults.alarm_at = sim::bench::AlarmAt{550.0, 150.0, 5.0};  // on the way from 500 to 600
   rig.bench().inject(faults);
-  rig::telemetry::TelemetrySubscriber telemetry("tcp://127.0.0.1:5656");
-  auto child = start_sweep({sweep, "--wait-subscribers", "1"});
+  auto child = start_sweep({sweep, "--wait-subscribers", "1", "--wait-subscribers-s", "120"});
+  const SweepEndpoints endpoints = wait_for_endpoints(*child, 60s);
+  ASSERT_FALSE(endpoints.publish.empty()) << "the sweep did not announce its endpoints";
+  rig::telemetry::TelemetrySubscriber telemetry(endpoints.publish);
   bool saw_alarm = false, saw_paused = false;
   const auto deadline = std::chrono::steady_clock::now() + 60s;
   while (!saw_paused && std::chrono::steady_clock::now() < deadline) {
@@ -207,13 +248,13 @@ TEST(SweepEndToEnd, ABenchAlarmPausesTheSweepUntilResumedThenItCompletes) {
   }
   ASSERT_TRUE(saw_alarm);
   ASSERT_TRUE(saw_paused);
-  const auto paused = rig::telemetry::send_control("tcp://127.0.0.1:5657", "status", 2000ms);
+  const auto paused = rig::telemetry::send_control(endpoints.control, "status", kControlWait);
   EXPECT_EQ(paused["status"]["state"], "paused") << paused.dump();
   const long long before = SqlProbe(rig.database()).count("SELECT count(*) FROM positions");
   std::this_thread::sleep_for(1s);
   // Paused means paused: nothing stored meanwhile.
   EXPECT_EQ(SqlProbe(rig.database()).count("SELECT count(*) FROM positions"), before);
-  rig::telemetry::send_control("tcp://127.0.0.1:5657", "resume", 2000ms);
+  rig::telemetry::send_control(endpoints.control, "resume", kControlWait);
   EXPECT_EQ(wait_exit(*child, 120s), 0);
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
@@ -320,12 +361,14 @@ TEST(SweepEndToEnd, AMalformedSweepFileIsRefusedNamingTheKey) {
 TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPausesIt) {
   SimRig rig;
   const std::string sweep = rig.write_sweep(SweepFileOptions{});
-  rig::telemetry::TelemetrySubscriber telemetry("tcp://127.0.0.1:5656");
   // The handshake: the sweep waits for this subscriber before it moves.
-  auto child = start_sweep({sweep, "--wait-subscribers", "1"});
+  auto child = start_sweep({sweep, "--wait-subscribers", "1", "--wait-subscribers-s", "120"});
+  const SweepEndpoints endpoints = wait_for_endpoints(*child, 60s);
+  ASSERT_FALSE(endpoints.publish.empty()) << "the sweep did not announce its endpoints";
+  rig::telemetry::TelemetrySubscriber telemetry(endpoints.publish);
   std::vector<std::string> types;
   std::vector<long long> positions;
-  bool paused_once = false;
+  enum class Pause { kNotAsked, kAsked, kResumed } pause = Pause::kNotAsked;
   const auto deadline = std::chrono::steady_clock::now() + 120s;
   while (std::chrono::steady_clock::now() < deadline) {
     const auto m = telemetry.receive(500ms);
@@ -333,24 +376,29 @@ TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPau
     const std::string type = m->value("type", "");
     types.push_back(type);
     if (type == "position") positions.push_back(m->value("plan_index", -1LL));
-    if (type == "position" && !paused_once) {
-      paused_once = true;
-      const auto reply = rig::telemetry::send_control("tcp://127.0.0.1:5657", "pause", 2000ms);
+    if (type == "position" && pause == Pause::kNotAsked) {
+      const auto reply = rig::telemetry::send_control(endpoints.control, "pause", kControlWait);
       EXPECT_TRUE(reply.value("ok", false)) << reply.dump();
-      // The position in progress finishes; then nothing moves until resume.
-      std::this_thread::sleep_for(2500ms);
-      const auto status = rig::telemetry::send_control("tcp://127.0.0.1:5657", "status", 2000ms);
+      pause = Pause::kAsked;
+    }
+    // The position in progress finishes, then the sweep says it holds (an
+    // event, however long that position took); from then on nothing is
+    // stored until resume.
+    if (type == "state" && m->value("state", "") == "paused" && pause == Pause::kAsked) {
+      const auto status = rig::telemetry::send_control(endpoints.control, "status", kControlWait);
       EXPECT_EQ(status["status"]["state"], "paused") << status.dump();
       const long long stored = SqlProbe(rig.database()).count("SELECT count(*) FROM positions");
       std::this_thread::sleep_for(1000ms);
       EXPECT_EQ(SqlProbe(rig.database()).count("SELECT count(*) FROM positions"), stored);
-      rig::telemetry::send_control("tcp://127.0.0.1:5657", "resume", 2000ms);
+      rig::telemetry::send_control(endpoints.control, "resume", kControlWait);
+      pause = Pause::kResumed;
     }
     if (type == "run_stop") {
       EXPECT_EQ(m->value("status", ""), "completed");
       break;
     }
   }
+  EXPECT_TRUE(pause == Pause::kResumed) << "the sweep never said it was paused";
   EXPECT_EQ(wait_exit(*child, 30s), 0);
   ASSERT_FALSE(types.empty());
   EXPECT_EQ(types.front(), "run_start");
@@ -365,12 +413,14 @@ namespace {
 
 TEST(SweepEndToEnd, ASecondSweepOnTakenTelemetryPortsStopsBeforeTouchingAnything) {
   SimRig rig;
-  const std::string sweep = rig.write_sweep(SweepFileOptions{});
-  rig::telemetry::TelemetryPublisher first("tcp://127.0.0.1:5656");  // another sweep's telemetry
+  rig::telemetry::TelemetryPublisher first("tcp://127.0.0.1:*");  // another sweep's telemetry
+  SweepFileOptions o;
+  o.telemetry_publish = first.endpoint();
+  const std::string sweep = rig.write_sweep(o);
   const motion::XY before = rig.bench().actual_position_mm();
   const rig_test::RigRun run = rig_test::run_rig("sweep " + sweep);
   EXPECT_EQ(run.exit_code, 1);
-  EXPECT_NE(run.err.find("tcp://127.0.0.1:5656"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find(first.endpoint()), std::string::npos) << run.err;
   EXPECT_FALSE(std::filesystem::exists(rig.database()));  // no run was started
   EXPECT_EQ(rig.bench().actual_position_mm().x_mm, before.x_mm);
   EXPECT_EQ(rig.camera().frames_rendered(), 0u);

@@ -65,18 +65,20 @@ TEST(RigSim, ServesBenchAndCameraAndStopsOnSigterm) {
   posix_spawn_file_actions_destroy(&actions);
   close(out[1]);
 
+  // The waits return as soon as the text or the frame is there; they only
+  // bound a broken test, with room for a loaded host or a sanitizer build.
   std::string text;
-  const bool up = read_until(out[0], text, "Aravis-Fake-RIGSIMTEST at 127.0.0.1", 10s);
+  const bool up = read_until(out[0], text, "Aravis-Fake-RIGSIMTEST at 127.0.0.1", 30s);
   EXPECT_TRUE(up) << text;
   EXPECT_NE(text.find("modbus-tcp://127.0.0.1:"), std::string::npos) << text;
   if (up) {
     vision::GigeSource camera("127.0.0.1");
     camera.open();
     camera.trigger();
-    EXPECT_EQ(camera.grab(3000ms).image.cols, 736);
+    EXPECT_EQ(camera.grab(10s).image.cols, 736);
   }
   kill(pid, SIGTERM);
-  EXPECT_TRUE(read_until(out[0], text, "SIGTERM, stopping", 5s)) << text;
+  EXPECT_TRUE(read_until(out[0], text, "SIGTERM, stopping", 30s)) << text;
   int status = 0;
   waitpid(pid, &status, 0);
   close(out[0]);
@@ -118,8 +120,10 @@ TEST(RigCapture, SavesTriggeredFramesFromTheSimulatedCamera) {
   server.start();
   const auto out = std::filesystem::temp_directory_path() / "rig_capture_test";
   std::filesystem::remove_all(out);
+  // A frame takes milliseconds; a long frame wait keeps a slow host from
+  // turning one into a timeout and a retry, which would render a fourth.
   EXPECT_EQ(run_rig({"capture", "--camera", "gige:" + server.address(), "--frames", "3", "--out",
-                     out.string()}),
+                     out.string(), "--timeout-ms", "10000"}),
             0);
   for (const char* name : {"frame_000000.png", "frame_000001.png", "frame_000002.png"}) {
     const cv::Mat image = cv::imread((out / name).string(), cv::IMREAD_UNCHANGED);

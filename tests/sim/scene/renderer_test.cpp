@@ -235,7 +235,10 @@ TEST(SceneRenderer, InkAreaDoesNotAliasAtOneMetre) {
 // Noise: a uniform scene of known signal. Expected variance in DN^2:
 // (e + read^2) / (e/DN)^2 + 1/12 (rounding to integers, Sheppard), e the
 // electrons of the signal. With N = 420k pixels the sample variance has a
-// relative standard error sqrt(2 / N) = 0.22 %; the bounds are 5 of them.
+// relative standard error sqrt(2 / N) = 0.22 %; the bounds are 5.5 of them.
+// The frame's noise comes from a fixed render seed (measured: within 1.4
+// standard errors); another seed would fail one of the three checks with
+// probability 3 x 3.8e-8.
 void expect_noise_matches_model(const SceneOptions& o) {
   const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
                         codebook(), o);
@@ -250,13 +253,13 @@ void expect_noise_matches_model(const SceneOptions& o) {
   const double e = signal_dn * e_per_dn;
   const double var =
       (e + o.read_noise_electrons * o.read_noise_electrons) / (e_per_dn * e_per_dn) + 1.0 / 12;
-  EXPECT_NEAR(mean[0], signal_dn, 5 * std::sqrt(var / n));
-  EXPECT_NEAR(stddev[0] * stddev[0], var, 5 * var * std::sqrt(2 / n));
+  EXPECT_NEAR(mean[0], signal_dn, 5.5 * std::sqrt(var / n));
+  EXPECT_NEAR(stddev[0] * stddev[0], var, 5.5 * var * std::sqrt(2 / n));
   // Independent pixels: the correlation of horizontal neighbours is 0 within
-  // 5 standard errors (1 / sqrt(N)).
+  // 5.5 standard errors (1 / sqrt(N)).
   const cv::Mat left = f.colRange(0, f.cols - 1) - mean[0], right = f.colRange(1, f.cols) - mean[0];
   const double correlation = left.dot(right) / (n * stddev[0] * stddev[0]);
-  EXPECT_NEAR(correlation, 0, 5 / std::sqrt(n));
+  EXPECT_NEAR(correlation, 0, 5.5 / std::sqrt(n));
 }
 
 TEST(SceneRenderer, ShotNoiseMatchesThePoissonModel) {

@@ -6,7 +6,9 @@
 //
 // Every buffer's status is checked: only ARV_BUFFER_STATUS_SUCCESS becomes a
 // Frame. Other statuses (missing packets, packet timeout, size mismatch...)
-// count as incomplete; gaps in the camera's frame ids count as lost. In
+// count as incomplete; gaps in the camera's frame ids count as lost (a frame
+// whose leader packet was lost has no id: it counts as incomplete and fills
+// one place of the gap its id leaves). In
 // software trigger mode an incomplete frame or a timeout is retried by
 // triggering again, up to CaptureOptions::retries times.
 //
