@@ -29,7 +29,7 @@ struct GroundTruth {
   std::vector<db::store::VisibleMarker> visible_markers;
   // Cramér-Rao bound on the distance's standard deviation for 1 px of
   // isotropic corner noise, for the pose marker's scope (its id) when it is in
-  // view and for "target" (every marker in view). See db/stats_cramer_rao.hpp.
+  // view and for "target" (every marker in view). See vision/cramer_rao.hpp.
   std::vector<db::store::DistanceBound> distance_bounds;
 };
 

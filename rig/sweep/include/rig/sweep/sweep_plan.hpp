@@ -10,7 +10,7 @@
 //           Applications 21 (2010) §3.3: 1,939 bench positions whose
 //           camera-target distances cover ten distance classes.
 // A plan knows nothing of the bench: whether its positions lie inside a
-// drive's soft limits is checked by load_sweep_config (rig/sweep_config.hpp)
+// drive's soft limits is checked by load_sweep_config (rig/sweep/sweep_config.hpp)
 // before the bench moves.
 #pragma once
 
