@@ -1,7 +1,9 @@
 #include "vision/pose_oi.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <Eigen/SVD>
+#include <array>
 #include <cmath>
 #include <complex>
 
@@ -154,6 +156,73 @@ Eigen::Matrix3d mirrored_start(const Correspondences& c, const Pose& T) {
   return complete_rotation(Rv * in_ray);
 }
 
+Eigen::Matrix3d skew(const Eigen::Vector3d& w) {
+  Eigen::Matrix3d S;
+  S << 0, -w.z(), w.y(), w.z(), 0, -w.x(), -w.y(), w.x(), 0;
+  return S;
+}
+
+// Newton steps after OI's cap; a strict minimum is reached in a few.
+constexpr int kNewtonSteps = 20;
+
+// Newton's method on the same E, for where OI crawls: near frontal the two
+// planar minima merge, E is nearly flat between them and OI's linear rate
+// tends to 1 (thousands of steps). With R(w) = exp([w]x) R, vec(R(w)) is, to
+// second order, vec(R + [w]x R + [w]x^2 R / 2), so E's gradient and Hessian
+// in w are exact at w = 0 from G. Each step is kept only when it lowers E, so
+// the minimum reached is OI's own. Returns whether it reached a strict
+// minimum (positive-definite Hessian) to step_tolerance_rad, or E's rounding
+// floor (noise-free data).
+bool newton_finish(const OiProblem& p, double floor, Matrix32d* R, double* error, int max_steps,
+                   int* steps_taken) {
+  constexpr double step_tolerance_rad = 1e-11;
+  for (int k = 0; k < max_steps; ++k) {
+    ++*steps_taken;
+    std::array<Eigen::Matrix3d, 3> E;
+    for (int i = 0; i < 3; ++i)
+      E[i] = skew(Eigen::Vector3d::Unit(i));
+    const Vector6d6 r = vec(*R);
+    std::array<Vector6d6, 3> d;
+    for (int i = 0; i < 3; ++i)
+      d[i] = vec(E[i] * *R);
+    Eigen::Vector3d g;
+    Eigen::Matrix3d H;
+    for (int i = 0; i < 3; ++i) {
+      g(i) = 2 * r.dot(p.G * d[i]);
+      for (int j = 0; j < 3; ++j) {
+        const Vector6d6 s = vec(0.5 * (E[i] * E[j] + E[j] * E[i]) * *R);
+        H(i, j) = 2 * d[i].dot(p.G * d[j]) + 2 * r.dot(p.G * s);
+      }
+    }
+    // Where E is not convex (between the two minima) the Hessian is shifted
+    // to positive definite, turning the step towards steepest descent.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(H);
+    const Eigen::Vector3d lambda = eig.eigenvalues();
+    const double shift = lambda(0) > 1e-9 * lambda(2) ? 0.0 : 1e-6 * lambda(2) - lambda(0);
+    const bool strict_minimum = shift == 0.0;
+    const Eigen::Vector3d g_eigen = eig.eigenvectors().transpose() * g;
+    const Eigen::Vector3d w =
+        -eig.eigenvectors() * (g_eigen.array() / (lambda.array() + shift)).matrix();
+    const double angle = w.norm();
+    if (strict_minimum && (angle < step_tolerance_rad || *error <= floor)) return true;
+    // Backtracking: in the flat valley E is far from quadratic over a full
+    // step; halving until E drops keeps every accepted step a descent.
+    bool lowered = false;
+    for (double scale = 1; scale > 1e-6 && !lowered; scale *= 0.5) {
+      const Eigen::Matrix3d turn = Eigen::AngleAxisd(scale * angle, w / angle).toRotationMatrix();
+      const Matrix32d next = nearest_orthonormal_pair(turn * *R);
+      const double next_error = error_of(p, next);
+      if (next_error < *error) {
+        *R = next;
+        *error = next_error;
+        lowered = true;
+      }
+    }
+    if (!lowered) return strict_minimum && angle < 1e3 * step_tolerance_rad;
+  }
+  return false;
+}
+
 }  // namespace
 
 namespace {
@@ -205,6 +274,9 @@ Estimate iterate(const OiProblem& p, const Correspondences& c, const Eigen::Matr
       break;
     }
   }
+  if (e.termination != Termination::kConverged &&
+      newton_finish(p, floor, &R, &error, kNewtonSteps, &steps))
+    e.termination = Termination::kConverged;
   e.iterations = steps;
   const Pose T_cam_plane{complete_rotation(R), p.T * vec(R)};
   e.T_cam_target = T_cam_plane * c.T_target_plane.inverse();

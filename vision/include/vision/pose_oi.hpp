@@ -9,6 +9,9 @@
 // an absolute-orientation problem solved by SVD (Lu et al. §4.3). Each step
 // does not increase E. The steps are extrapolated with SQUAREM (Varadhan &
 // Roland 2008), which keeps OI's fixed points and only accepts a lower E.
+// Where OI still crawls at its cap (near frontal, where the two planar minima
+// merge and its linear rate tends to 1), Newton's method on the same E
+// finishes the descent; it too only accepts a lower E, so the minimum is OI's.
 //
 // hybrid_oi (Maidi et al. §2.2, Fig. 3) starts OI from the analytic square pose.
 #pragma once
@@ -20,7 +23,8 @@ namespace vision {
 struct OiOptions {
   // Iteration cap. OI converges linearly; from a good start 10-40 steps reach
   // the tolerance, from weak perspective up to a few hundred near the planar
-  // ambiguity. Higher: slower worst case, never less accurate.
+  // ambiguity. At the cap up to 20 Newton steps on E finish the descent (see
+  // above). Higher: slower worst case, never less accurate.
   int max_iterations = 500;
   // Stop when the relative decrease of E in one step falls below this.
   // Smaller: closer to the exact minimum, more iterations.
