@@ -93,6 +93,24 @@ TEST(Realism, ShippedProfilesLoadAndTheSimFileUsesLab) {
                sim::camera::RealismError);
 }
 
+// A profile's [bench.x] / [bench.y] replace the bench file's imperfections,
+// key by key; an absent key keeps the file's value.
+TEST(Realism, BenchImperfectionsReplaceTheBenchFilesValues) {
+  sim::bench::BenchSimConfig bench =
+      sim::bench::load_bench_sim_config(repo("config/benches/sim.toml"));
+  const double file_repeatability = bench.x.repeatability_mm;
+  sim::camera::apply_bench_realism(shipped("ideal"), &bench);
+  EXPECT_EQ(bench.x.repeatability_mm, file_repeatability);
+  EXPECT_EQ(bench.y.encoder_scale_ppm, 0);
+  sim::camera::apply_bench_realism(shipped("lab"), &bench);
+  EXPECT_EQ(bench.x.backlash_mm, 0.002);
+  EXPECT_EQ(bench.x.encoder_scale_ppm, 5.0);
+  EXPECT_EQ(bench.y.encoder_scale_ppm, -3.0);
+  EXPECT_EQ(bench.y.vibration_frequency_hz, 45.0);
+  EXPECT_EQ(bench.x.max_speed_mm_s,
+            sim::bench::load_bench_sim_config(repo("config/benches/sim.toml")).x.max_speed_mm_s);
+}
+
 // The message of the RealismError that loading a profile of `text` throws,
 // after "PATH: ".
 std::string profile_error(const std::string& text) {
