@@ -80,7 +80,7 @@ TEST(RigSim, ServesBenchAndCameraAndStopsOnSigterm) {
   // The waits return as soon as the text or the frame is there; they only
   // bound a broken test, with room for a loaded host or a sanitizer build.
   std::string text;
-  const bool up = read_until(out[0], text, "realism profile 'paper'", 30s);
+  const bool up = read_until(out[0], text, "), realism profile 'paper'", 30s);
   EXPECT_TRUE(up) << text;
   EXPECT_NE(text.find("modbus-tcp://127.0.0.1:"), std::string::npos) << text;
   EXPECT_NE(text.find("rig-rig-sim-RIGSIMTEST at 127.0.0.1"), std::string::npos) << text;
