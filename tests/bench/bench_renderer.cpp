@@ -49,6 +49,42 @@ BENCHMARK(BM_RenderFrame)
     ->Args({100, 40})
     ->Unit(benchmark::kMillisecond);
 
+// The costliest realism: config/realism/paper.toml's scene (defocus up to
+// sigma 2 px, thin prism, PRNU/DSNU, dark current, the physical sensor path
+// at 1.5x exposure and 2x gain).
+sim::scene::SceneOptions paper_profile_scene() {
+  sim::scene::SceneOptions o;
+  o.blur_sigma_px = 1.0;
+  o.vignetting = 0.35;
+  o.thin_prism = {0.0005, 0.0, -0.0004, 0.0};
+  o.f_number = 4;
+  o.focus_distance_m = 0.35;
+  o.read_noise_electrons = 63;
+  o.dark_current_e_per_s = 100;
+  o.prnu_rel = 0.01;
+  o.dsnu_electrons = 10;
+  return o;
+}
+
+void BM_RenderFramePaperProfile(benchmark::State& state) {
+  static const vision::Codebook codebook;
+  static const sim::scene::SceneRenderer r(vision::Camera::paper_default(),
+                                           vision::Target::paper_default(), codebook,
+                                           paper_profile_scene());
+  const vision::Pose T = pose_at(state.range(0) / 100.0, static_cast<double>(state.range(1)));
+  uint64_t seed = 1;
+  for (auto _ : state) {
+    sim::scene::RenderedFrame frame = r.render(T, seed++, {1.5, 0.015, 2.0});
+    benchmark::DoNotOptimize(frame.image.data);
+  }
+}
+BENCHMARK(BM_RenderFramePaperProfile)
+    ->ArgNames({"distance_cm", "tilt_deg"})
+    ->Args({10, 0})
+    ->Args({40, 20})
+    ->Args({100, 40})
+    ->Unit(benchmark::kMillisecond);
+
 void BM_RenderMovingFrame(benchmark::State& state) {
   const sim::scene::SceneRenderer& r = renderer();
   const vision::Pose a = pose_at(0.40, 10), b = pose_at(0.41, 12);

@@ -173,7 +173,7 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
     f.host_timestamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
-    f.source = "gige:Aravis-Fake-RIGSIM01";
+    f.source = "gige:rig-rig-sim-RIGSIM01";
     rec.frames.push_back(std::move(f));
     sums.record += vision::seconds_since(record_start);
   }

@@ -1,6 +1,7 @@
 // Reading the [sim] table of a bench file (see config.hpp).
 #include "sim/bench/config.hpp"
 
+#include <cmath>
 #include <cstdint>
 
 #include "config/reader.hpp"
@@ -20,7 +21,16 @@ AxisConfig read_axis(config::Table t) {
   a.backlash_mm = t.number_or("backlash_mm", a.backlash_mm, config::non_negative());
   a.repeatability_mm = t.number_or("repeatability_mm", a.repeatability_mm, config::non_negative());
   a.initial_mm = t.number_or("initial_mm", a.initial_mm);
+  a.encoder_scale_ppm = t.number_or("encoder_scale_ppm", a.encoder_scale_ppm);
+  a.thermal_drift_um_per_min = t.number_or("thermal_drift_um_per_min", a.thermal_drift_um_per_min);
+  a.vibration_amplitude_mm =
+      t.number_or("vibration_amplitude_mm", a.vibration_amplitude_mm, config::non_negative());
+  a.vibration_frequency_hz =
+      t.number_or("vibration_frequency_hz", a.vibration_frequency_hz, config::positive());
+  a.vibration_decay_s = t.number_or("vibration_decay_s", a.vibration_decay_s, config::positive());
   t.reject_unknown();
+  if (std::abs(a.encoder_scale_ppm) > 1e4)
+    t.fail("encoder_scale_ppm", "a scale error within -10000 .. 10000 ppm");
   // An absent key's default is named as the problem.
   const auto given = [&](const char* key, double value) {
     return t.has(key) ? std::string() : "not given, so " + format_number(value) + " mm";

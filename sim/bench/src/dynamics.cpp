@@ -33,6 +33,18 @@ double BenchDynamics::quantize(double mm) const {
   return std::round(mm / r) * r;
 }
 
+double BenchDynamics::actual(const Axis& a) const {
+  const AxisConfig& c = a.cfg;
+  double mm = (a.carriage + a.error) / (1 + c.encoder_scale_ppm * 1e-6);
+  mm += c.thermal_drift_um_per_min * 1e-3 * time_s_ / 60;
+  if (c.vibration_amplitude_mm > 0 && !a.moving) {
+    const double t = time_s_ - a.stop_time_s;
+    mm += a.stop_dir * c.vibration_amplitude_mm * std::exp(-t / c.vibration_decay_s) *
+          std::cos(2 * M_PI * c.vibration_frequency_hz * t);
+  }
+  return mm;
+}
+
 bool BenchDynamics::in_position() const {
   const double band = config_.in_position_band_mm + 1e-9;
   return !moving() && !homing_ && std::fabs(encoder_x_mm() - commanded_x_) <= band &&
@@ -75,6 +87,8 @@ void BenchDynamics::step(Axis& a, double h) {
       a.motor = a.target;
       a.v = 0;
       a.moving = false;
+      a.stop_time_s = time_s_ + h;
+      a.stop_dir = dir;
       a.error = a.cfg.repeatability_mm * normal_(rng_);
     } else {
       a.motor = a.target - dir * root * root;
@@ -100,6 +114,7 @@ void BenchDynamics::advance(double dt_s) {
     const bool was_moving = moving();
     step(x_, h);
     step(y_, h);
+    time_s_ += h;
     if (alarm_at_ && was_moving &&
         std::hypot(x_.motor - alarm_at_->x_mm, y_.motor - alarm_at_->y_mm) <=
             alarm_at_->radius_mm) {

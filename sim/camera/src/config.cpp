@@ -1,6 +1,7 @@
 #include "sim/camera/config.hpp"
 
 #include <cstdint>
+#include <filesystem>
 
 #include "config/reader.hpp"
 #include "vision/codebook.hpp"
@@ -37,6 +38,12 @@ void read_camera(config::Table camera, SimRigConfig* c) {
   camera.reject_unknown();
 }
 
+void use_profile(SimRigConfig* c, const std::string& path) {
+  c->realism_profile = path;
+  c->realism = load_realism_profile(path);
+  c->camera.device_version = "realism " + c->realism.name;
+}
+
 }  // namespace
 
 SimRigConfig load_sim_rig_config(const std::string& path) {
@@ -46,20 +53,48 @@ SimRigConfig load_sim_rig_config(const std::string& path) {
   SimRigConfig c;
   read_bench(root.table("bench"), &c);
   read_camera(root.table("camera"), &c);
+  config::Table realism = root.optional_table("realism");
+  const std::string profile =
+      realism.exists() ? realism.existing_file("profile", "a realism profile (config/realism/)")
+                       : std::string();
+  realism.reject_unknown();
   root.reject_unknown();
+  if (!profile.empty()) use_profile(&c, profile);
   return c;
+}
+
+void override_realism(SimRigConfig* config, const std::string& sim_file,
+                      const std::string& name_or_file) {
+  const bool is_name =
+      !name_or_file.empty() &&
+      name_or_file.find_first_not_of(
+          "abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-") == std::string::npos;
+  const std::string path =
+      is_name
+          ? (std::filesystem::path(sim_file).parent_path() / "realism" / (name_or_file + ".toml"))
+                .string()
+          : name_or_file;
+  use_profile(config, path);
+}
+
+SimTruth sim_truth(const SimRigConfig& config) {
+  const vision::Camera camera = config.calibration.empty()
+                                    ? vision::Camera::paper_default()
+                                    : vision::Camera::load(config.calibration);
+  return draw_truth(camera, vision::RigGeometry::load(config.rig_geometry),
+                    vision::Target::load(config.target), config.realism);
 }
 
 std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
                                                  BenchPositionFn position) {
-  const vision::Camera camera = config.calibration.empty()
-                                    ? vision::Camera::paper_default()
-                                    : vision::Camera::load(config.calibration);
-  auto renderer = std::make_shared<const scene::SceneRenderer>(
-      camera, vision::Target::load(config.target), vision::Codebook());
-  return std::make_unique<CameraServer>(std::move(renderer),
-                                        vision::RigGeometry::load(config.rig_geometry),
-                                        std::move(position), config.camera);
+  SimTruth truth = sim_truth(config);
+  scene::SceneOptions options = config.realism.scene;
+  options.thin_prism = truth.thin_prism;
+  options.exposure_time_s = config.camera.nominal_exposure_us * 1e-6;
+  auto renderer = std::make_shared<const scene::SceneRenderer>(truth.camera, truth.target,
+                                                               vision::Codebook(), options);
+  return std::make_unique<CameraServer>(std::move(renderer), truth.geometry, std::move(position),
+                                        config.camera);
 }
 
 }  // namespace sim::camera

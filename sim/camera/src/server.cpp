@@ -17,6 +17,24 @@
 
 namespace sim::camera {
 
+namespace {
+
+// GigE Vision 2.0 bootstrap registers (Aravis's ARV_GVBS_*_OFFSET): three
+// NUL-terminated strings of 32 bytes each, which the discovery answer and the
+// GenICam features DeviceVendorName, DeviceModelName and DeviceVersion read.
+constexpr guint32 kManufacturerNameAddress = 0x0048;
+constexpr guint32 kModelNameAddress = 0x0068;
+constexpr guint32 kDeviceVersionAddress = 0x0088;
+constexpr size_t kBootstrapStringBytes = 32;
+
+void write_bootstrap_string(ArvFakeCamera* camera, guint32 address, const std::string& text) {
+  char bytes[kBootstrapStringBytes] = {};
+  std::memcpy(bytes, text.data(), std::min(text.size(), kBootstrapStringBytes - 1));
+  arv_fake_camera_write_memory(camera, address, kBootstrapStringBytes, bytes);
+}
+
+}  // namespace
+
 struct CameraServer::Impl {
   CameraServer* server = nullptr;
   ArvGvFakeCamera* gv_camera = nullptr;
@@ -47,13 +65,16 @@ struct CameraServer::Impl {
     // A carriage that moved less than 1 µm during the exposure is static: the
     // blur would be far below a pixel and render() is several times cheaper.
     const bool moved = std::hypot(x1 - x0, y1 - y0) >= 1e-3;
-    cv::Mat image =
-        moved ? server->renderer_->render_moving(T0, server->geometry_.T_cam_target(x1, y1), seed)
+    // The sensor collects photons for the exposure time (signal and shot
+    // noise grow with it, dark signal too); the gain (GainRaw read as dB)
+    // amplifies signal and noise alike.
+    const scene::SensorExposure sensor{exposure_us / options.nominal_exposure_us,
+                                       exposure_us * 1e-6, std::pow(10.0, gain / 20.0)};
+    const cv::Mat image =
+        moved ? server->renderer_
+                    ->render_moving(T0, server->geometry_.T_cam_target(x1, y1), seed, sensor)
                     .image
-              : server->renderer_->render(T0, seed).image;
-    // Brightness is linear in exposure time and in gain (GainRaw read as dB).
-    const double scale = exposure_us / options.nominal_exposure_us * std::pow(10.0, gain / 20.0);
-    if (std::abs(scale - 1.0) > 1e-9) image.convertTo(image, CV_8U, scale);
+              : server->renderer_->render(T0, seed, sensor).image;
     copy_region(buffer, image, format);
     {
       std::lock_guard<std::mutex> lock(mutex);
@@ -110,6 +131,13 @@ CameraServer::CameraServer(std::shared_ptr<const scene::SceneRenderer> renderer,
   if (options_.serial.empty() || options_.serial.size() >= 16)
     throw std::invalid_argument("sim::camera::CameraServer: serial '" + options_.serial +
                                 "' must have 1 to 15 characters");
+  for (const std::string* text :
+       {&options_.vendor_name, &options_.model_name, &options_.device_version}) {
+    if (text->empty() || text->size() >= kBootstrapStringBytes)
+      throw std::invalid_argument(
+          "sim::camera::CameraServer: '" + *text +
+          "' must have 1 to 31 characters (a GigE Vision bootstrap string)");
+  }
 }
 
 CameraServer::~CameraServer() {
@@ -155,6 +183,9 @@ void CameraServer::start() {
   arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_EXPOSURE_TIME_US,
                                  static_cast<guint32>(std::lround(options_.nominal_exposure_us)));
   arv_fake_camera_set_trigger_frequency(camera, options_.trigger_poll_hz);
+  write_bootstrap_string(camera, kManufacturerNameAddress, options_.vendor_name);
+  write_bootstrap_string(camera, kModelNameAddress, options_.model_name);
+  write_bootstrap_string(camera, kDeviceVersionAddress, options_.device_version);
   arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl.get());
   impl_ = std::move(impl);
 }

@@ -4,6 +4,7 @@
 // rendered from the bench's actual position (sim/camera/server.hpp).
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <fstream>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -50,6 +51,9 @@ struct SimBenchOptions {
   std::string host = "127.0.0.1";
   int port = 1502;
   double time_scale = 0;  // 0: the file's [sim] time_scale
+  // The rig's realism profile, whose [bench.x] / [bench.y] replace the file's
+  // imperfections; null for `rig sim bench`.
+  const sim::camera::RealismProfile* realism = nullptr;
 };
 
 // The parts of the simulated rig that run together. A part is started by
@@ -63,6 +67,7 @@ std::unique_ptr<sim::bench::BenchServer> start_bench(const SimBenchOptions& o) {
   motion::DriveProfile profile = motion::load_drive_profile(o.config);
   sim::bench::BenchSimConfig config = sim::bench::load_bench_sim_config(o.config);
   if (o.time_scale > 0) config.time_scale = o.time_scale;
+  if (o.realism != nullptr) sim::camera::apply_bench_realism(*o.realism, &config);
   sim::bench::BenchServerOptions server;
   server.host = o.host;
   server.port = o.port;
@@ -109,16 +114,35 @@ int run_until_stopped(const SimBenchOptions& bench_options) {
   return serve_until_signalled(signals, rig);
 }
 
+struct SimRigOptions {
+  std::string config = "config/sim.toml";
+  std::string realism;      // NAME or FILE; empty: the file's [realism] profile
+  std::string write_truth;  // JSON file for the hidden truth; empty: none
+};
+
+void write_truth(const sim::camera::SimRigConfig& config, const std::string& path) {
+  std::ofstream out(path, std::ios::trunc);
+  out << sim::camera::truth_json(sim::camera::sim_truth(config), config.realism);
+  out.close();
+  if (!out) throw std::runtime_error("--write-truth " + path + ": cannot write the file");
+  std::cout << "rig sim: truth of realism profile '" << config.realism.name << "' written to "
+            << path << std::endl;
+}
+
 // rig sim --config FILE: the bench and the camera that sees from it.
-int run_rig_until_stopped(const std::string& config_path) {
+int run_rig_until_stopped(const SimRigOptions& options) {
   StopSignals signals;  // before any server thread exists
   SimRig rig;
   const auto code = start_or_exit_code([&] {
-    const sim::camera::SimRigConfig config = sim::camera::load_sim_rig_config(config_path);
+    sim::camera::SimRigConfig config = sim::camera::load_sim_rig_config(options.config);
+    if (!options.realism.empty())
+      sim::camera::override_realism(&config, options.config, options.realism);
+    if (!options.write_truth.empty()) write_truth(config, options.write_truth);
     SimBenchOptions bench_options;
     bench_options.config = config.bench_config;
     bench_options.host = config.bench_host;
     bench_options.port = config.bench_port;
+    bench_options.realism = &config.realism;
     rig.bench = start_bench(bench_options);
     const sim::bench::BenchServer* bench = rig.bench.get();
     rig.camera = sim::camera::make_camera_server(config, [bench] {
@@ -128,7 +152,7 @@ int run_rig_until_stopped(const std::string& config_path) {
     rig.camera->start();
     std::cout << "rig sim camera: serving " << rig.camera->device_id() << " at "
               << rig.camera->address() << " (rig capture --camera gige:" << rig.camera->address()
-              << ")" << std::endl;
+              << "), realism profile '" << config.realism.name << "'" << std::endl;
   });
   if (code) return *code;
   return serve_until_signalled(signals, rig);
@@ -142,17 +166,24 @@ int main(int argc, char** argv) {
   CLI::App* cmd = &app;
   int status = kExitOk;
   cmd->require_subcommand(0, 1);
-  auto rig_config = std::make_shared<std::string>("config/sim.toml");
-  cmd->add_option("--config", *rig_config,
+  auto rig_options = std::make_shared<SimRigOptions>();
+  cmd->add_option("--config", rig_options->config,
                   "Simulated rig file: bench, camera, target and geometry (config/sim.toml)")
       ->capture_default_str()
       ->check(CLI::ExistingFile);
+  cmd->add_option("--realism", rig_options->realism,
+                  "Realism profile: a NAME (realism/NAME.toml beside the rig file: ideal, lab, "
+                  "paper) or a FILE; overrides the rig file's [realism] profile");
+  cmd->add_option("--write-truth", rig_options->write_truth,
+                  "Write the hidden truth (true camera, lens, rig geometry, print scale) as JSON "
+                  "to this file before serving");
   cmd->footer(
       "Without a subcommand: the bench and the GigE camera together, until SIGINT or SIGTERM.\n"
       "Example: rig sim --config config/sim.toml\n"
+      "         rig sim --config config/sim.toml --realism paper --write-truth truth.json\n"
       "         rig sim bench --port 1502 --config config/benches/sim.toml");
-  cmd->callback([&status, cmd, rig_config] {
-    if (cmd->get_subcommands().empty()) status = run_rig_until_stopped(*rig_config);
+  cmd->callback([&status, cmd, rig_options] {
+    if (cmd->get_subcommands().empty()) status = run_rig_until_stopped(*rig_options);
   });
 
   auto bench_options = std::make_shared<SimBenchOptions>();

@@ -12,22 +12,22 @@ namespace {
 
 // Inverts the lens model at one pixel from an initial guess; true when the
 // re-distorted point is within tolerance_px of the pixel.
-bool newton_undistort(const vision::Camera& camera, const Eigen::Vector2d& pixel,
-                      Eigen::Vector2d* xy) {
+bool newton_undistort(const Lens& lens, const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) {
   constexpr double kTolerancePx = 1e-10;
   for (int iteration = 0; iteration < 20; ++iteration) {
-    const Eigen::Vector2d residual = camera.distort_normalized(*xy) - pixel;
+    const Eigen::Vector2d residual = lens.distort_normalized(*xy) - pixel;
     if (residual.norm() < kTolerancePx) return true;
-    const Eigen::Matrix2d J = camera.distort_jacobian(*xy);
+    const Eigen::Matrix2d J = lens.distort_jacobian(*xy);
     *xy -= J.inverse() * residual;
     if (!xy->allFinite()) return false;
   }
-  return (camera.distort_normalized(*xy) - pixel).norm() < kTolerancePx;
+  return (lens.distort_normalized(*xy) - pixel).norm() < kTolerancePx;
 }
 
 }  // namespace
 
-RayTable build_ray_table(const vision::Camera& camera, double vignetting) {
+RayTable build_ray_table(const Lens& lens, double vignetting) {
+  const vision::Camera& camera = lens.camera();
   RayTable t;
   t.width = camera.width_px();
   t.height = camera.height_px();
@@ -48,8 +48,12 @@ RayTable build_ray_table(const vision::Camera& camera, double vignetting) {
           static_cast<size_t>(v) * static_cast<size_t>(t.width) + static_cast<size_t>(u);
       const Eigen::Vector2d pixel(u, v);
       Eigen::Vector2d xy = guess;
-      bool ok = newton_undistort(camera, pixel, &xy);
-      if (!ok) ok = camera.undistort_point(pixel, &xy);
+      bool ok = newton_undistort(lens, pixel, &xy);
+      if (!ok) {
+        // The Brown-Conrady inverse, then Newton again for the prism terms.
+        ok = camera.undistort_point(pixel, &xy) &&
+             (!lens.has_prism() || newton_undistort(lens, pixel, &xy));
+      }
       const double r = std::hypot(u - k.cx, v - k.cy) / r_corner;
       t.vignetting_gain[i] = static_cast<float>(1.0 - vignetting * r * r);
       if (!ok) {
@@ -59,7 +63,7 @@ RayTable build_ray_table(const vision::Camera& camera, double vignetting) {
       }
       if (u == 0) row_start = xy;
       guess = xy;
-      const Eigen::Matrix2d Jinv = camera.distort_jacobian(xy).inverse();
+      const Eigen::Matrix2d Jinv = lens.distort_jacobian(xy).inverse();
       t.x[i] = static_cast<float>(xy.x());
       t.y[i] = static_cast<float>(xy.y());
       t.j00[i] = static_cast<float>(Jinv(0, 0));

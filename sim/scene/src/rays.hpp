@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "vision/camera.hpp"
+#include "lens.hpp"
 
 namespace sim::scene::detail {
 
@@ -22,6 +22,6 @@ struct RayTable {
 
 // Newton's method per pixel, warm-started from the neighbouring pixel (the
 // model is smooth), to 1e-10 px; falls back to Camera::undistort_point.
-RayTable build_ray_table(const vision::Camera& camera, double vignetting);
+RayTable build_ray_table(const Lens& lens, double vignetting);
 
 }  // namespace sim::scene::detail

@@ -15,6 +15,7 @@
 
 #include "disturbances.hpp"
 #include "geometry.hpp"
+#include "lens.hpp"
 #include "rays.hpp"
 #include "sensor.hpp"
 #include "sheet.hpp"
@@ -52,6 +53,17 @@ void validate(const SceneOptions& o) {
   check(o.occluders >= 0, "occluders", o.occluders, ">= 0");
   check(o.occluder_min_width_px > 0 && o.occluder_max_width_px >= o.occluder_min_width_px,
         "occluder_max_width_px", o.occluder_max_width_px, ">= occluder_min_width_px > 0");
+  for (double s : o.thin_prism)
+    check(std::abs(s) <= 0.05, "thin_prism", s, "each of s1..s4 within -0.05 .. 0.05");
+  check(o.f_number >= 0 && o.f_number <= 64, "f_number", o.f_number, "0 (no defocus) .. 64");
+  check(o.focus_distance_m > 0, "focus_distance_m", o.focus_distance_m, "> 0");
+  check(o.pixel_pitch_m > 0 && o.pixel_pitch_m < 1e-3, "pixel_pitch_m", o.pixel_pitch_m,
+        "in (0, 1e-3) m");
+  check(o.exposure_time_s > 0 && o.exposure_time_s <= 100, "exposure_time_s", o.exposure_time_s,
+        "in (0, 100] s");
+  check(o.dark_current_e_per_s >= 0, "dark_current_e_per_s", o.dark_current_e_per_s, ">= 0");
+  check(o.prnu_rel >= 0 && o.prnu_rel <= 0.2, "prnu_rel", o.prnu_rel, "0 .. 0.2");
+  check(o.dsnu_electrons >= 0, "dsnu_electrons", o.dsnu_electrons, ">= 0");
   check(o.motion_blur_samples >= 1, "motion_blur_samples", o.motion_blur_samples, ">= 1");
 }
 
@@ -64,19 +76,35 @@ struct SceneRenderer::Impl {
   vision::Camera camera;
   vision::Target target;
   SceneOptions options;
+  detail::Lens lens;
   detail::RayTable rays;
   detail::SheetArtwork front;
   detail::SheetArtwork back;
   detail::NormalTable normal;
+  detail::FixedPattern pattern;
 
   Impl(const vision::Camera& c, const vision::Target& t, const vision::Codebook& codebook,
        const SceneOptions& o)
       : camera(c),
         target(t),
         options(o),
-        rays(detail::build_ray_table(c, o.vignetting)),
+        lens(c, o.thin_prism),
+        rays(detail::build_ray_table(lens, o.vignetting)),
         front(t, codebook, true),
-        back(t, codebook, false) {}
+        back(t, codebook, false),
+        pattern(detail::make_fixed_pattern(c.width_px(), c.height_px(), o.prnu_rel,
+                                           o.dsnu_electrons, o.fixed_pattern_seed)) {}
+
+  cv::Mat sensor(const cv::Mat& ideal, uint64_t seed, const SensorExposure& e) const {
+    const detail::SensorModel model{options.full_well_electrons,
+                                    options.read_noise_electrons,
+                                    options.adc_bits,
+                                    options.noise,
+                                    e.signal_scale,
+                                    options.dark_current_e_per_s * e.exposure_time_s,
+                                    e.gain};
+    return detail::apply_sensor(ideal, model, normal, seed, pattern);
+  }
 
   std::vector<MarkerTruth> truth(const vision::Pose& T) const;
   std::vector<detail::Occluder> place_occluders(const std::vector<MarkerTruth>& markers,
@@ -103,7 +131,7 @@ std::vector<MarkerTruth> SceneRenderer::Impl::truth(const vision::Pose& T) const
       const Eigen::Vector3d p = T * corners[k];
       in_front = in_front && p.z() > 0;
       t.corners_px[k] = p.z() > 0
-                            ? camera.project(p)
+                            ? lens.project(p)
                             : Eigen::Vector2d::Constant(std::numeric_limits<double>::quiet_NaN());
     }
     double distance = in_front ? std::numeric_limits<double>::infinity() : -1e9;
@@ -111,7 +139,7 @@ std::vector<MarkerTruth> SceneRenderer::Impl::truth(const vision::Pose& T) const
       for (int s = 0; s < kOutlinePerSide; ++s) {
         const double f = static_cast<double>(s) / kOutlinePerSide;
         const Eigen::Vector2d px =
-            camera.project(T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]));
+            lens.project(T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]));
         distance = std::min({distance, px.x(), px.y(), w - px.x(), h - px.y()});
       }
     }
@@ -175,7 +203,7 @@ void SceneRenderer::Impl::mark_occlusions(const vision::Pose& T,
         const Eigen::Vector3d p = T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]);
         ok = ok && p.z() > 0;
         if (!ok) break;
-        const Eigen::Vector2d px = camera.project(p);
+        const Eigen::Vector2d px = lens.project(p);
         outline.emplace_back(static_cast<int>(std::lround(std::clamp(px.x(), -1e5, 1e5) * 16)),
                              static_cast<int>(std::lround(std::clamp(px.y(), -1e5, 1e5) * 16)));
       }
@@ -221,10 +249,10 @@ cv::Mat SceneRenderer::Impl::irradiance(const vision::Pose* poses, int count, ui
   mark_occlusions(truth_pose, occluders, truths);
   if (markers != nullptr) *markers = std::move(truths);
 
-  if (options.blur_sigma_px > 0) {
-    cv::GaussianBlur(radiance, radiance, cv::Size(), options.blur_sigma_px, options.blur_sigma_px,
-                     cv::BORDER_REFLECT);
-  }
+  const double defocus =
+      defocus_sigma_px(options, camera.intrinsics().fx, std::max(truth_pose.t.z(), 1e-3));
+  const double sigma = std::hypot(options.blur_sigma_px, defocus);
+  if (sigma > 0) cv::GaussianBlur(radiance, radiance, cv::Size(), sigma, sigma, cv::BORDER_REFLECT);
   // Vignetting and exposure: DN = 255 * exposure * gain * radiance.
   const float scale = static_cast<float>(255.0 * options.exposure);
   float* r = radiance.ptr<float>();
@@ -232,6 +260,14 @@ cv::Mat SceneRenderer::Impl::irradiance(const vision::Pose* poses, int count, ui
   for (size_t i = 0, n = radiance.total(); i < n; ++i)
     r[i] *= scale * g[i];
   return radiance;
+}
+
+double defocus_sigma_px(const SceneOptions& o, double fx_px, double depth_m) {
+  if (o.f_number <= 0) return 0;
+  const double f = fx_px * o.pixel_pitch_m;  // focal length, metres
+  const double c = f * f / (o.f_number * std::abs(o.focus_distance_m - f)) *
+                   std::abs(depth_m - o.focus_distance_m) / depth_m;
+  return c / o.pixel_pitch_m / 4;
 }
 
 SceneRenderer::SceneRenderer(const vision::Camera& camera, const vision::Target& target,
@@ -244,19 +280,43 @@ SceneRenderer::~SceneRenderer() = default;
 SceneRenderer::SceneRenderer(SceneRenderer&&) noexcept = default;
 SceneRenderer& SceneRenderer::operator=(SceneRenderer&&) noexcept = default;
 
+// Throws std::invalid_argument naming the field of a SensorExposure out of range.
+static void check_exposure(const SensorExposure& e) {
+  const auto fail = [](const char* name, double value, const char* expected) {
+    throw std::invalid_argument(std::string("SensorExposure.") + name + " = " +
+                                std::to_string(value) + ": expected " + expected);
+  };
+  if (!(e.signal_scale > 0 && std::isfinite(e.signal_scale)))
+    fail("signal_scale", e.signal_scale, "a finite number > 0");
+  if (!(e.exposure_time_s >= 0 && std::isfinite(e.exposure_time_s)))
+    fail("exposure_time_s", e.exposure_time_s, "a finite number >= 0");
+  if (!(e.gain > 0 && std::isfinite(e.gain))) fail("gain", e.gain, "a finite number > 0");
+}
+
 RenderedFrame SceneRenderer::render(const vision::Pose& T_cam_target, uint64_t seed) const {
+  return render(T_cam_target, seed, SensorExposure{1, impl_->options.exposure_time_s, 1});
+}
+
+RenderedFrame SceneRenderer::render(const vision::Pose& T_cam_target, uint64_t seed,
+                                    const SensorExposure& exposure) const {
+  check_exposure(exposure);
   RenderedFrame frame;
   const cv::Mat ideal = impl_->irradiance(&T_cam_target, 1, seed, &frame.markers, T_cam_target);
-  const detail::SensorModel sensor{impl_->options.full_well_electrons,
-                                   impl_->options.read_noise_electrons, impl_->options.adc_bits,
-                                   impl_->options.noise};
-  frame.image = detail::apply_sensor(ideal, sensor, impl_->normal, seed);
+  frame.image = impl_->sensor(ideal, seed, exposure);
   return frame;
 }
 
 RenderedFrame SceneRenderer::render_moving(const vision::Pose& T_cam_target_start,
                                            const vision::Pose& T_cam_target_end,
                                            uint64_t seed) const {
+  return render_moving(T_cam_target_start, T_cam_target_end, seed,
+                       SensorExposure{1, impl_->options.exposure_time_s, 1});
+}
+
+RenderedFrame SceneRenderer::render_moving(const vision::Pose& T_cam_target_start,
+                                           const vision::Pose& T_cam_target_end, uint64_t seed,
+                                           const SensorExposure& exposure) const {
+  check_exposure(exposure);
   const int n = impl_->options.motion_blur_samples;
   const Eigen::Quaterniond q0(T_cam_target_start.R), q1(T_cam_target_end.R);
   const auto at = [&](double f) {
@@ -270,10 +330,7 @@ RenderedFrame SceneRenderer::render_moving(const vision::Pose& T_cam_target_star
     poses.push_back(at((k + 0.5) / n));
   RenderedFrame frame;
   const cv::Mat ideal = impl_->irradiance(poses.data(), n, seed, &frame.markers, at(0.5));
-  const detail::SensorModel sensor{impl_->options.full_well_electrons,
-                                   impl_->options.read_noise_electrons, impl_->options.adc_bits,
-                                   impl_->options.noise};
-  frame.image = detail::apply_sensor(ideal, sensor, impl_->normal, seed);
+  frame.image = impl_->sensor(ideal, seed, exposure);
   return frame;
 }
 

@@ -52,9 +52,70 @@ NormalTable::NormalTable() : table_(1u << 16) {
   }
 }
 
+FixedPattern make_fixed_pattern(int width, int height, double prnu_rel, double dsnu_electrons,
+                                uint64_t seed) {
+  FixedPattern p;
+  if (prnu_rel == 0 && dsnu_electrons == 0) return p;
+  const size_t n = static_cast<size_t>(width) * static_cast<size_t>(height);
+  p.gain.resize(n);
+  p.dark_offset.resize(n);
+  const NormalTable normal;
+  uint64_t state = seed * 0x9E6C63D0676A9A99ull + 0x2545F4914F6CDD1Dull;
+  for (size_t i = 0; i < n; ++i) {
+    const uint64_t bits = splitmix64(&state);
+    p.gain[i] = static_cast<float>(1 + prnu_rel * normal[static_cast<uint32_t>(bits & 0xFFFFu)]);
+    p.dark_offset[i] =
+        static_cast<float>(dsnu_electrons * normal[static_cast<uint32_t>((bits >> 16) & 0xFFFFu)]);
+  }
+  return p;
+}
+
+namespace {
+
+// The physical path of apply_sensor (see sensor.hpp): electrons first, then
+// the gain.
+void apply_sensor_physical(const float* in, size_t n, const SensorModel& model,
+                           const NormalTable& normal, uint64_t seed, const FixedPattern& pattern,
+                           uint8_t* o) {
+  const float full_well = static_cast<float>(model.full_well_electrons);
+  const float e_per_dn = static_cast<float>(model.signal_scale * model.full_well_electrons / 255.0);
+  const float dn_per_e = static_cast<float>(255.0 / model.full_well_electrons * model.gain);
+  const float read_var =
+      static_cast<float>(model.read_noise_electrons * model.read_noise_electrons);
+  const float dark = static_cast<float>(model.dark_electrons);
+  const float step = static_cast<float>(1 << (8 - std::clamp(model.adc_bits, 1, 8)));
+  const float inv_step = 1.0f / step;
+  const float max_level = std::floor(255.0f * inv_step) * step;
+  const bool fixed = !pattern.empty();
+  uint64_t state = seed * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull;
+  uint64_t bits = 0;
+  for (size_t i = 0; i < n; ++i) {
+    float e = std::max(in[i], 0.0f) * e_per_dn;
+    if (fixed) e = e * pattern.gain[i] + pattern.dark_offset[i];
+    e += dark;
+    if (model.noise) {
+      if ((i & 3) == 0) bits = splitmix64(&state);
+      const float z = normal[static_cast<uint32_t>(bits & 0xFFFFu)];
+      bits >>= 16;
+      e += std::sqrt(std::max(e, 0.0f) + read_var) * z;
+    }
+    const float dn = std::clamp(e, 0.0f, full_well) * dn_per_e;
+    const float level = static_cast<float>(static_cast<int>(dn * inv_step + 0.5f)) * step;
+    o[i] = static_cast<uint8_t>(std::min(level, max_level));
+  }
+}
+
+}  // namespace
+
 cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const NormalTable& normal,
-                     uint64_t seed) {
+                     uint64_t seed, const FixedPattern& pattern) {
   CV_Assert(ideal_dn.type() == CV_32FC1 && ideal_dn.isContinuous());
+  if (!pattern.empty() || model.dark_electrons != 0 || model.signal_scale != 1 || model.gain != 1) {
+    cv::Mat out(ideal_dn.size(), CV_8UC1);
+    apply_sensor_physical(ideal_dn.ptr<float>(), ideal_dn.total(), model, normal, seed, pattern,
+                          out.ptr<uint8_t>());
+    return out;
+  }
   cv::Mat out(ideal_dn.size(), CV_8UC1);
   const float* in = ideal_dn.ptr<float>();
   uint8_t* o = out.ptr<uint8_t>();

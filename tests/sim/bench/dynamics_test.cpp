@@ -164,3 +164,59 @@ TEST(BenchDynamics, StopDeceleratesAtTheConfiguredRate) {
 }
 
 }  // namespace
+
+namespace {
+
+// Encoder scale error: the drive stops when the encoder reads the target, so
+// the carriage is at target / (1 + ppm 1e-6): at 500 mm and +200 ppm, 100 um
+// short (500 - 500 / 1.0002 = 99.98 um), while the read-back says 500.
+TEST(BenchDynamics, EncoderScaleErrorLeavesTheCarriageShortOfTheReadBack) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.x.encoder_scale_ppm = 200;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  d.move(500, 0, 100);
+  run_until_still(d);
+  EXPECT_DOUBLE_EQ(d.encoder_x_mm(), 500.0);
+  EXPECT_NEAR(d.actual_x_mm(), 500 / 1.0002, 1e-9);
+  EXPECT_NEAR(d.actual_y_mm(), 0.0, 1e-12);
+}
+
+// Thermal drift: linear in simulated time, unseen by the encoder. After
+// 10 minutes at 0.5 um/min the carriage is 5 um off (exact: no other error).
+TEST(BenchDynamics, ThermalDriftGrowsLinearlyInSimulatedTime) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.y.thermal_drift_um_per_min = 0.5;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  d.advance(300);
+  EXPECT_NEAR(d.actual_y_mm(), 0.0025, 1e-9);
+  d.advance(300);
+  EXPECT_NEAR(d.actual_y_mm(), 0.005, 1e-9);
+  EXPECT_DOUBLE_EQ(d.encoder_y_mm(), 0.0);
+}
+
+// Residual vibration: from the stop the carriage is displaced by
+// A exp(-t / tau) cos(2 pi f t) along the move, while the encoder is already
+// in position; a frame taken at 1 tau is off by A e^-1 cos(2 pi f tau), one
+// taken after 10 tau by less than A e^-10. Times are the integrator's own
+// (time_s of the stop step), so the check is exact to rounding.
+TEST(BenchDynamics, ResidualVibrationDecaysAfterTheStop) {
+  sim::bench::BenchSimConfig c = quiet_config();
+  c.x.vibration_amplitude_mm = 0.02;
+  c.x.vibration_frequency_hz = 25;
+  c.x.vibration_decay_s = 0.04;
+  sim::bench::BenchDynamics d(c, 0, 0);
+  d.move(10, 0, 100);
+  while (d.moving())
+    d.advance(0.25e-3);
+  const double stopped_at = d.time_s();
+  EXPECT_TRUE(d.in_position());
+  EXPECT_GT(d.actual_x_mm() - 10, 0.015);  // just stopped: overshoot of up to A
+  d.advance(0.04 - (d.time_s() - stopped_at));
+  const double t = 0.04;
+  EXPECT_NEAR(d.actual_x_mm() - 10, 0.02 * std::exp(-1.0) * std::cos(2 * M_PI * 25 * t), 1e-6);
+  d.advance(0.4);
+  EXPECT_LT(std::abs(d.actual_x_mm() - 10), 0.02 * std::exp(-10.0));
+  EXPECT_DOUBLE_EQ(d.encoder_x_mm(), 10.0);
+}
+
+}  // namespace

@@ -173,7 +173,8 @@ TEST(BenchSimConfig, MisspeltKeyIsRefusedByName) {
     EXPECT_STREQ(e.what(),
                  "f.toml: sim.x.accel_mm_s = 5: unknown key (misspelt?); expected one of "
                  "max_speed_mm_s, accel_mm_s2, travel_min_mm, travel_max_mm, backlash_mm, "
-                 "repeatability_mm, initial_mm");
+                 "repeatability_mm, initial_mm, encoder_scale_ppm, thermal_drift_um_per_min, "
+                 "vibration_amplitude_mm, vibration_frequency_hz, vibration_decay_s");
   }
 }
 

@@ -12,6 +12,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
@@ -58,8 +59,19 @@ TEST(RigSim, ServesBenchAndCameraAndStopsOnSigterm) {
   posix_spawn_file_actions_adddup2(&actions, out[1], STDOUT_FILENO);
   posix_spawn_file_actions_addclose(&actions, out[0]);
   std::string config_path = config.string();
-  char* argv[] = {const_cast<char*>(rig.c_str()), const_cast<char*>("sim"),
-                  const_cast<char*>("--config"), config_path.data(), nullptr};
+  // A realism profile given as a FILE, and its hidden truth written out.
+  std::string profile = config_dir + "realism/paper.toml";
+  std::string truth = (std::filesystem::temp_directory_path() / "rig_sim_test_truth.json").string();
+  std::filesystem::remove(truth);
+  char* argv[] = {const_cast<char*>(rig.c_str()),
+                  const_cast<char*>("sim"),
+                  const_cast<char*>("--config"),
+                  config_path.data(),
+                  const_cast<char*>("--realism"),
+                  profile.data(),
+                  const_cast<char*>("--write-truth"),
+                  truth.data(),
+                  nullptr};
   pid_t pid = -1;
   ASSERT_EQ(posix_spawn(&pid, rig.c_str(), &actions, nullptr, argv, environ), 0);
   posix_spawn_file_actions_destroy(&actions);
@@ -68,15 +80,23 @@ TEST(RigSim, ServesBenchAndCameraAndStopsOnSigterm) {
   // The waits return as soon as the text or the frame is there; they only
   // bound a broken test, with room for a loaded host or a sanitizer build.
   std::string text;
-  const bool up = read_until(out[0], text, "Aravis-Fake-RIGSIMTEST at 127.0.0.1", 30s);
+  const bool up = read_until(out[0], text, "), realism profile 'paper'", 30s);
   EXPECT_TRUE(up) << text;
   EXPECT_NE(text.find("modbus-tcp://127.0.0.1:"), std::string::npos) << text;
+  EXPECT_NE(text.find("rig-rig-sim-RIGSIMTEST at 127.0.0.1"), std::string::npos) << text;
   if (up) {
     vision::GigeSource camera("127.0.0.1");
     camera.open();
+    EXPECT_EQ(camera.device_id(), "rig-rig-sim-RIGSIMTEST");
     camera.trigger();
     EXPECT_EQ(camera.grab(10s).image.cols, 736);
+    // The truth is the paper profile's draw: not the nominal camera.
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(truth));
+    EXPECT_EQ(j["profile"], "paper");
+    EXPECT_NE(j["camera"]["fx"].get<double>(), vision::Camera::paper_default().intrinsics().fx);
+    EXPECT_EQ(j["print_scale_error"].get<double>(), 0.003);
   }
+  std::filesystem::remove(truth);
   kill(pid, SIGTERM);
   EXPECT_TRUE(read_until(out[0], text, "SIGTERM, stopping", 30s)) << text;
   int status = 0;
@@ -132,6 +152,17 @@ TEST(RigCapture, SavesTriggeredFramesFromTheSimulatedCamera) {
   }
   EXPECT_EQ(server.frames_rendered(), 3u);
   std::filesystem::remove_all(out);
+}
+
+// A realism profile that does not exist or holds an unknown key is bad input
+// (exit 2), refused before anything binds a port.
+TEST(RigSim, BadRealismProfileExitsTwo) {
+  const std::string config = std::string(RIG_SOURCE_DIR) + "/config/sim.toml";
+  EXPECT_EQ(run_rig({"sim", "--config", config, "--realism", "nosuchprofile"}), 2);
+  const auto bad = std::filesystem::temp_directory_path() / "rig_sim_bad_profile.toml";
+  std::ofstream(bad) << "[optics]\nblur = 1\n";
+  EXPECT_EQ(run_rig({"sim", "--config", config, "--realism", bad.string()}), 2);
+  std::filesystem::remove(bad);
 }
 
 TEST(RigCapture, MissingCameraExitsOneAndBadSpecExitsTwo) {

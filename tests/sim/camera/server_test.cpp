@@ -7,6 +7,7 @@
 // One GigE camera per address: RESOURCE_LOCK gige_loopback.
 #include "sim/camera/server.hpp"
 
+#include <arv.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -118,12 +119,12 @@ TEST_F(SimCamera, FrameExposedWhileTheBenchMovesIsBlurredAlongTheMove) {
   // a unit slip: 20000 µs slept as ms would travel 2 m.
   EXPECT_GE(e.x1_mm - e.x0_mm, 2.0);
   EXPECT_LT(e.x1_mm - e.x0_mm, 20.0);
-  // Exposure 2x nominal doubles the signal (sim::camera::CameraServerOptions).
-  cv::Mat moving = renderer_
-                       ->render_moving(geometry_.T_cam_target(e.x0_mm, e.y0_mm),
-                                       geometry_.T_cam_target(e.x1_mm, e.y1_mm), e.seed)
-                       .image;
-  moving.convertTo(moving, CV_8U, 2.0);
+  // Exposure 2x nominal collects twice the electrons (sim::camera::CameraServerOptions).
+  const cv::Mat moving = renderer_
+                             ->render_moving(geometry_.T_cam_target(e.x0_mm, e.y0_mm),
+                                             geometry_.T_cam_target(e.x1_mm, e.y1_mm), e.seed,
+                                             sim::scene::SensorExposure{2.0, 0.02, 1.0})
+                             .image;
   EXPECT_EQ(differing_pixels(frame.image, moving), 0);
 }
 
@@ -183,6 +184,30 @@ TEST_F(SimCamera, NoFrameLostOrIncompleteOver500FramesWithTheOtherCoreBusy) {
   EXPECT_EQ(source.counters().lost, 0u);
   EXPECT_EQ(source.counters().incomplete, 0u);
   EXPECT_EQ(source.counters().delivered, 500u);
+}
+
+// The camera says it is simulated, and which realism profile it renders:
+// GenICam DeviceVendorName "rig", DeviceModelName "rig-sim", DeviceVersion
+// "realism <profile>", read back by a GigE Vision client (Aravis).
+TEST_F(SimCamera, AnnouncesItselfAsSimulatedWithItsRealismProfile) {
+  sim::camera::CameraServerOptions options;
+  options.device_version = "realism lab";
+  start(options);
+  EXPECT_EQ(server_->device_id(), "rig-rig-sim-RIGSIM01");
+  GError* error = nullptr;
+  ArvCamera* camera = arv_camera_new(server_->address().c_str(), &error);
+  ASSERT_NE(camera, nullptr) << (error ? error->message : "");
+  const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
+  const char* model = arv_camera_get_model_name(camera, nullptr);
+  const char* version =
+      arv_device_get_string_feature_value(arv_camera_get_device(camera), "DeviceVersion", nullptr);
+  EXPECT_STREQ(vendor, "rig");
+  EXPECT_STREQ(model, "rig-sim");
+  EXPECT_STREQ(version, "realism lab");
+  g_object_unref(camera);
+  vision::GigeSource source(server_->address());
+  source.open();
+  EXPECT_EQ(source.device_id(), server_->device_id());
 }
 
 TEST_F(SimCamera, SecondCameraOnTheSameAddressIsRefused) {

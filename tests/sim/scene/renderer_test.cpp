@@ -279,6 +279,147 @@ TEST(SceneRenderer, ReadNoiseAddsInQuadrature) {
   expect_noise_matches_model(o);
 }
 
+// The physical sensor (SensorExposure, dark current, PRNU, DSNU) on a uniform
+// scene: e = scale * signal + dark current * t electrons; temporal variance
+// (e + read^2) electrons^2; fixed pattern (prnu * scale * signal)^2 + dsnu^2;
+// both times (DN per electron * gain)^2, plus 1/12 DN^2 of rounding. Bounds
+// as expect_noise_matches_model: 5.5 standard errors of the sample mean and
+// variance over the frame's 420k pixels, from fixed seeds.
+struct SensorCase {
+  SceneOptions options;
+  SensorExposure exposure;
+};
+
+SceneOptions flat_scene(double reflectance) {
+  SceneOptions o;
+  o.show_target = false;
+  o.vignetting = 0;
+  o.background_reflectance = reflectance;
+  return o;
+}
+
+void expect_sensor_model(const SensorCase& c, uint64_t seed = 99) {
+  const SceneOptions& o = c.options;
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  cv::Mat f;
+  r.render(vision::Pose(), seed, c.exposure).image.convertTo(f, CV_64F);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(f, mean, stddev);
+  const double n = static_cast<double>(f.total());
+  const double dn_per_e = 255 / o.full_well_electrons * c.exposure.gain;
+  const double signal_e =
+      c.exposure.signal_scale * dn_of(o.background_reflectance, o) * o.full_well_electrons / 255;
+  const double e = signal_e + o.dark_current_e_per_s * c.exposure.exposure_time_s;
+  const double temporal = o.noise ? e + o.read_noise_electrons * o.read_noise_electrons : 0;
+  const double fixed = std::pow(o.prnu_rel * signal_e, 2) + std::pow(o.dsnu_electrons, 2);
+  const double var = (temporal + fixed) * dn_per_e * dn_per_e + 1.0 / 12;
+  EXPECT_NEAR(mean[0], e * dn_per_e, 5.5 * std::sqrt(var / n));
+  EXPECT_NEAR(stddev[0] * stddev[0], var, 5.5 * var * std::sqrt(2 / n));
+}
+
+// Photon transfer: the exposure scales the electrons, so the mean and the
+// shot-noise variance grow together (variance - read^2 proportional to the
+// signal), as on a real sensor (EMVA 1288), not as an image scaled after the noise.
+TEST(SceneRenderer, ExposureMovesShotNoiseAlongThePhotonTransferCurve) {
+  for (const double scale : {0.5, 2.0}) {
+    SCOPED_TRACE(scale);
+    expect_sensor_model({flat_scene(0.4), {scale, 0.01, 1}});
+  }
+}
+
+// Gain acts after the well: at half the exposure and twice the gain the mean
+// is that of unity gain, the variance 4 x (e / 2 + read^2) instead of e + read^2.
+TEST(SceneRenderer, GainAmplifiesSignalAndNoiseAlike) {
+  expect_sensor_model({flat_scene(0.4), {0.5, 0.01, 2.0}});
+}
+
+// Dark current: its mean and its shot noise grow with the exposure time.
+TEST(SceneRenderer, DarkCurrentGrowsWithExposureTime) {
+  SceneOptions o = flat_scene(0.0);
+  o.dark_current_e_per_s = 2e5;  // 2000 e- (25.5 DN) in 10 ms
+  for (const double t : {0.01, 0.02}) {
+    SCOPED_TRACE(t);
+    expect_sensor_model({o, {1.0, t, 1}});
+  }
+}
+
+// PRNU and DSNU are the camera's own fixed pattern: the same in every frame
+// (noise off: two render seeds give the same image), with the stated spatial
+// spread, another pattern for another fixed_pattern_seed; with noise on, the
+// difference of two frames holds the temporal noise only (2 x (e + read^2)).
+TEST(SceneRenderer, PrnuAndDsnuAreFixedAcrossFrames) {
+  SceneOptions o = flat_scene(0.7);
+  o.noise = false;
+  o.prnu_rel = 0.02;
+  o.dsnu_electrons = 30;
+  expect_sensor_model({o, {1.0, 0.01, 1}}, 1);
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  EXPECT_EQ(
+      cv::countNonZero(r.render(vision::Pose(), 1).image != r.render(vision::Pose(), 2).image), 0);
+  SceneOptions other = o;
+  other.fixed_pattern_seed = 2;
+  const SceneRenderer r2(vision::Camera::paper_default(), vision::Target::paper_default(),
+                         codebook(), other);
+  EXPECT_GT(
+      cv::countNonZero(r.render(vision::Pose(), 1).image != r2.render(vision::Pose(), 1).image),
+      100000);
+
+  o.noise = true;
+  const SceneRenderer noisy(vision::Camera::paper_default(), vision::Target::paper_default(),
+                            codebook(), o);
+  cv::Mat a, b;
+  noisy.render(vision::Pose(), 5, {1.0, 0.01, 1}).image.convertTo(a, CV_64F);
+  noisy.render(vision::Pose(), 6, {1.0, 0.01, 1}).image.convertTo(b, CV_64F);
+  cv::Scalar mean, stddev;
+  cv::meanStdDev(a - b, mean, stddev);
+  const double e = dn_of(o.background_reflectance, o) * o.full_well_electrons / 255;
+  const double dn_per_e = 255 / o.full_well_electrons;
+  const double var =
+      2 * ((e + o.read_noise_electrons * o.read_noise_electrons) * dn_per_e * dn_per_e + 1.0 / 12);
+  const double n = static_cast<double>(a.total());
+  EXPECT_NEAR(stddev[0] * stddev[0], var, 5.5 * var * std::sqrt(2 / n));
+}
+
+// The well saturates before the gain: 3x the electrons of a 0.7 scene
+// overflow the full well, and at gain 0.4 every pixel reads exactly
+// 255 DN x 0.4 = 102 DN, whatever the noise draws.
+TEST(SceneRenderer, WellSaturatesBeforeTheGain) {
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), flat_scene(0.7));
+  const cv::Mat image = r.render(vision::Pose(), 3, {3.0, 0.01, 0.4}).image;
+  EXPECT_EQ(cv::countNonZero(image != 102), 0);
+}
+
+// Thin-lens defocus: blur circle c = f^2 / (N (s_f - f)) |s - s_f| / s,
+// sigma = c / 4 / pitch. By hand for the paper camera (fx 706.1 px, 8.6 um
+// cells: f = 6.0725 mm) at f/4 focused at 0.4 m: at 0.1 m c = 70.21 um =
+// 8.164 px, sigma 2.041 px; zero at the focus distance. The renderer blurs
+// with exactly hypot(blur_sigma_px, defocus): the same image as an in-focus
+// render with that PSF (noise off, bit for bit).
+TEST(SceneRenderer, DefocusFollowsTheThinLensBlurCircle) {
+  SceneOptions o;
+  o.noise = false;
+  o.f_number = 4;
+  o.focus_distance_m = 0.4;
+  o.pixel_pitch_m = 8.6e-6;
+  const double fx = vision::Camera::paper_default().intrinsics().fx;
+  EXPECT_NEAR(defocus_sigma_px(o, fx, 0.1), 2.041, 1e-3);
+  EXPECT_EQ(defocus_sigma_px(o, fx, 0.4), 0.0);
+  EXPECT_GT(defocus_sigma_px(o, fx, 0.15), defocus_sigma_px(o, fx, 0.3));
+  EXPECT_GT(defocus_sigma_px(o, fx, 1.0), defocus_sigma_px(o, fx, 0.6));
+  const vision::Pose T = pose(0.2, 10, 5, 0);
+  SceneOptions in_focus = o;
+  in_focus.f_number = 0;
+  in_focus.blur_sigma_px = std::hypot(o.blur_sigma_px, defocus_sigma_px(o, fx, 0.2));
+  const SceneRenderer defocused(vision::Camera::paper_default(), vision::Target::paper_default(),
+                                codebook(), o);
+  const SceneRenderer reference(vision::Camera::paper_default(), vision::Target::paper_default(),
+                                codebook(), in_focus);
+  EXPECT_EQ(cv::countNonZero(defocused.render(T, 1).image != reference.render(T, 1).image), 0);
+}
+
 // Vignetting: gain 1 - v (r / r_corner)^2, so the farthest image corner
 // receives (1 - v) of the centre's irradiance (noise-free, no blur: exact to
 // float rounding, 1e-4 DN).

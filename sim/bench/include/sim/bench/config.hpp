@@ -32,6 +32,21 @@ struct AxisConfig {
   // position differ from its read-back.
   double repeatability_mm = 0;
   double initial_mm = 0;  // position at power-up
+  // Encoder scale error, parts per million: the encoder reads (1 + ppm 1e-6)
+  // times the carriage's true travel from 0, so the carriage stops at
+  // target / (1 + ppm 1e-6) (a glass scale ~ +-5 ppm, a rotary encoder on a
+  // ball screw with pitch error ~ 20-50 ppm). 0 = exact.
+  double encoder_scale_ppm = 0;
+  // Thermal drift of the carriage relative to the encoder, um per minute of
+  // simulated time since power-up (screw warming: ~0.1-1 um/min in the first
+  // hour). 0 = none.
+  double thermal_drift_um_per_min = 0;
+  // Residual vibration after a stop (the encoder is already in position; the
+  // camera on its mount is not): the carriage oscillates along the last move's
+  // direction as A exp(-t / tau) cos(2 pi f t) from the stop. A = 0 = none.
+  double vibration_amplitude_mm = 0;
+  double vibration_frequency_hz = 30;
+  double vibration_decay_s = 0.05;
 };
 
 // Raise an alarm when the bench passes within radius_mm of (x_mm, y_mm).

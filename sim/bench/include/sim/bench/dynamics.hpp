@@ -3,7 +3,9 @@
 // cruise at the commanded speed, decelerate so as to stop on the target),
 // integrated in sub-steps of at most 0.25 ms of simulated time; a backlash
 // deadband between motor and carriage; a random repeatability error of the
-// carriage at each stop; travel limits, homing, alarms, emergency stop.
+// carriage at each stop; encoder scale error, thermal drift and residual
+// vibration after a stop (AxisConfig); travel limits, homing, alarms,
+// emergency stop.
 //
 // Two positions exist, as on a real rig: the encoder read-back (motor
 // position, quantized), which is all the driver ever sees, and the actual
@@ -42,8 +44,13 @@ class BenchDynamics {
 
   double encoder_x_mm() const { return quantize(x_.motor); }
   double encoder_y_mm() const { return quantize(y_.motor); }
-  double actual_x_mm() const { return x_.carriage + x_.error; }
-  double actual_y_mm() const { return y_.carriage + y_.error; }
+  // The carriage's true position: the motor's through the backlash, the
+  // repeatability error of the last stop, the encoder scale error, the
+  // thermal drift and the residual vibration (AxisConfig).
+  double actual_x_mm() const { return actual(x_); }
+  double actual_y_mm() const { return actual(y_); }
+  // Simulated seconds since construction.
+  double time_s() const { return time_s_; }
   bool homed() const { return homed_; }
   bool homing() const { return homing_; }
   bool moving() const { return x_.moving || y_.moving; }
@@ -68,7 +75,10 @@ class BenchDynamics {
     double carriage = 0;  // mm, follows motor within the backlash deadband
     double error = 0;     // mm, repeatability error drawn at the last stop
     bool moving = false;
+    double stop_time_s = -1e9;  // when the axis last stopped (vibration)
+    double stop_dir = 0;        // sign of the last move (vibration direction)
   };
+  double actual(const Axis& a) const;
 
   void step(Axis& a, double h);
   void start(Axis& a, double target, double speed);
@@ -85,6 +95,7 @@ class BenchDynamics {
   bool estop_ = false;
   double commanded_x_, commanded_y_;
   std::optional<AlarmAt> alarm_at_;
+  double time_s_ = 0;
   std::mt19937_64 rng_;
   std::normal_distribution<double> normal_{0.0, 1.0};
 };

@@ -9,15 +9,16 @@
 // T_cam_target through the rig geometry and renders the target (with motion
 // blur, render_moving, if the carriage moved during the exposure). Any GigE
 // Vision client (vision::GigeSource, arv-tool-0.8, arv-viewer) sees a camera
-// "Aravis-Fake-<serial>" at the interface address.
+// "rig-rig-sim-<serial>" (vendor "rig", model "rig-sim", device version
+// "realism <profile>") at the interface address.
 //
 // Honoured features: Width, Height, OffsetX, OffsetY (a region of the
 // renderer's image; the sensor size is the camera model's), PixelFormat (Mono8
 // exactly as rendered; Mono16 as DN * 257; RGB8 and the 8-bit Bayer formats
-// carry the grey image), ExposureTimeAbs (exposure duration, blur window and
-// brightness, linear relative to nominal_exposure_us), GainRaw (dB, linear
-// brightness), TriggerMode/TriggerSource=Software/TriggerSoftware, and the free
-// run frame rate.
+// carry the grey image), ExposureTimeAbs (exposure duration, blur window,
+// electrons collected relative to nominal_exposure_us, dark signal), GainRaw
+// (dB, amplifies signal and noise after the well: scene::SensorExposure),
+// TriggerMode/TriggerSource=Software/TriggerSoftware, and the free run frame rate.
 //
 // Threads: the fill callback runs on Aravis's camera thread, under Aravis's
 // fill mutex; the position callback is called there and must be thread-safe
@@ -44,14 +45,15 @@ using BenchPositionFn = std::function<std::pair<double, double>()>;
 struct CameraServerOptions {
   // IPv4 address (or interface name) the camera binds; loopback by default.
   std::string interface_address = "127.0.0.1";
-  // Serial number; the device id is "Aravis-Fake-<serial>" (< 16 characters).
+  // Serial number; the device id is "<vendor>-<model>-<serial>" (< 16 characters).
   std::string serial = "RIGSIM01";
   // How often, in Hz, the camera thread looks for a software trigger: the
   // trigger-to-exposure delay is up to 1 / trigger_poll_hz. Higher = lower
   // latency, more idle wake-ups (1000 Hz: 1 ms, negligible CPU).
   double trigger_poll_hz = 1000;
   // The exposure time (µs) at which a frame is exactly the renderer's output
-  // (its SceneOptions::exposure). Other exposures scale the signal linearly.
+  // (its SceneOptions::exposure). Other exposures scale the collected
+  // electrons linearly (scene::SensorExposure: shot noise as sqrt(signal)).
   double nominal_exposure_us = 10000;
   // Wait the exposure time in the camera thread, so that a moving bench is
   // seen moving (motion blur) and a frame takes as long as a real one. Off
@@ -59,6 +61,13 @@ struct CameraServerOptions {
   bool real_time_exposure = true;
   // Render noise seed: frame k uses seed + k, so a frame can be re-rendered.
   uint64_t seed = 1;
+  // The GigE Vision bootstrap strings the camera announces itself with
+  // (GenICam DeviceVendorName, DeviceModelName, DeviceVersion; < 32
+  // characters each): a simulated camera says so, and which realism profile
+  // it renders ("realism lab").
+  std::string vendor_name = "rig";
+  std::string model_name = "rig-sim";
+  std::string device_version = "realism ideal";
 };
 
 class CameraServer {
@@ -77,9 +86,11 @@ class CameraServer {
   // Stops answering and releases the address; safe to call twice.
   void stop();
 
-  // "Aravis-Fake-<serial>", as arv-tool-0.8 lists it; use it or address() as
-  // the gige: spec of a FrameSource.
-  std::string device_id() const { return "Aravis-Fake-" + options_.serial; }
+  // "<vendor>-<model>-<serial>" ("rig-rig-sim-RIGSIM01"), as arv-tool-0.8
+  // lists it; use it or address() as the gige: spec of a FrameSource.
+  std::string device_id() const {
+    return options_.vendor_name + "-" + options_.model_name + "-" + options_.serial;
+  }
   const std::string& address() const { return options_.interface_address; }
 
   // What the last frame was rendered from.

@@ -16,17 +16,19 @@
 //   3. lighting gradient across the sheet, background (optionally clutter)
 //      where the sheet is not, occluders in front;
 //   4. optical blur (Gaussian PSF), vignetting;
-//   5. sensor: electrons = exposure * full_well * irradiance, shot noise
-//      (Poisson, as a Gaussian of variance = electrons) + read noise, gain to
-//      8-bit DN, rounding and clipping.
+//   5. sensor: electrons = signal_scale * exposure * full_well * irradiance
+//      * (1 + PRNU), plus the dark signal (dark current x exposure time +
+//      DSNU); shot noise (Poisson, as a Gaussian of variance = electrons) +
+//      read noise; the well clips at full_well; gain to 8-bit DN, rounding
+//      and clipping.
 // The artwork is the marker cells and the sheet; the small id/size text that
 // vision::artwork prints in the margins is not rendered (it lies in the quiet
 // zone's outer part and carries no geometry).
 //
-// Ground truth: vision::Camera::project of the target's corners (A, B, C, D
-// of vision::Target::corners_m), i.e. distorted pixels in OpenCV's convention
-// (the centre of the top-left pixel is (0, 0)). The renderer places edges with
-// the same model, so a perfect detector finds these corners.
+// Ground truth: vision::Camera::project (plus SceneOptions::thin_prism) of the target's corners (A,
+// B, C, D of vision::Target::corners_m), i.e. distorted pixels in OpenCV's convention (the centre
+// of the top-left pixel is (0, 0)). The renderer places edges with the same model, so a perfect
+// detector finds these corners.
 //
 // Thread safety: render() and render_moving() are const and may run
 // concurrently on one SceneRenderer. The optical blur is cv::GaussianBlur,
@@ -34,7 +36,9 @@
 //
 // Cost: building the ray table takes ~50 ms per camera; a 736x571 frame
 // takes 4-7 ms on one core (tests/bench/bench_renderer.cpp), render_moving()
-// about motion_blur_samples times the geometry part of that.
+// about motion_blur_samples times the geometry part of that. The costliest
+// realism (config/realism/paper.toml: defocus, fixed pattern, the physical
+// sensor path) measured 1.25-1.4x the default options' time per frame.
 #pragma once
 
 #include <Eigen/Core>
@@ -89,9 +93,28 @@ struct SceneOptions {
   // values smooth edges (fewer detections of small markers, corners still
   // unbiased because the PSF is symmetric).
   double blur_sigma_px = 0.6;
+  // Thin-lens defocus, added in quadrature to blur_sigma_px (0 = off, the
+  // default). The lens is focused at focus_distance_m with f-number f_number;
+  // its focal length is fx * pixel_pitch_m (the camera's own fx). An object
+  // at depth s (the target origin's z in the camera frame, one value per
+  // frame: the depth change across a tilted sheet is ignored) is imaged as a
+  // blur circle of diameter c = f^2 / (N (s_f - f)) |s - s_f| / s on the
+  // sensor, c / pitch pixels, whose per-axis standard deviation as a uniform
+  // disk is c / 4: the Gaussian sigma used (defocus_sigma_px).
+  double f_number = 0;
+  double focus_distance_m = 0.4;
+  double pixel_pitch_m = 8.6e-6;  // the XC-555's 8.6 um cells
   // Relative irradiance loss at the image corners (natural vignetting, ~cos^4):
   // gain(r) = 1 - vignetting * (r / r_corner)^2, r from the principal point.
   double vignetting = 0.25;
+  // Thin-prism lens terms s1..s4 of the true lens (OpenCV's order, Weng et
+  // al. 1992): xd += s1 r2 + s2 r2^2, yd += s3 r2 + s4 r2^2 on top of the
+  // camera's Brown-Conrady model, r2 on the normalized image plane. Beyond
+  // vision::Camera's 5-parameter model, so a calibration cannot fit them
+  // exactly; a decentred or tilted lens element gives |s| ~ 1e-4 .. 1e-3.
+  // Rendering and ground truth (MarkerTruth::corners_px) both use them.
+  // All 0 (default): the camera's own model exactly.
+  std::array<double, 4> thin_prism{};
 
   // --- sensor ---
   // Fraction of the full well that a perfect white (reflectance 1) at full
@@ -108,6 +131,21 @@ struct SceneOptions {
   int adc_bits = 8;
   // false: no shot or read noise (deterministic, for geometry tests).
   bool noise = true;
+  // Exposure time (seconds) of render() and render_moving() without
+  // SensorExposure: the time at which `exposure` holds. Sets the dark signal.
+  double exposure_time_s = 0.01;
+  // Dark current, electrons per second per pixel (mean; its shot noise is
+  // added with the signal's). A cooled CCD ~0.1 e-/s, a warm CMOS 1-50 e-/s.
+  double dark_current_e_per_s = 0;
+  // Photo-response non-uniformity: relative 1-sigma of each pixel's gain,
+  // fixed over frames (EMVA 1288 PRNU; 0.5-1 % typical). 0 = uniform.
+  double prnu_rel = 0;
+  // Dark-signal non-uniformity: 1-sigma of each pixel's fixed dark offset,
+  // electrons (EMVA 1288 DSNU; a few e- typical). 0 = none.
+  double dsnu_electrons = 0;
+  // Seed of the PRNU/DSNU pattern: one pattern per camera, the same in every
+  // frame (unlike the render seed, which draws the temporal noise).
+  uint64_t fixed_pattern_seed = 1;
 
   // --- optional disturbances (off by default) ---
   // Random shapes (rectangles, quadrilaterals, ellipses, lines, checker
@@ -127,6 +165,20 @@ struct SceneOptions {
   // render_moving() (irradiance averaged over the exposure). More samples =
   // smoother blur, proportionally slower. render() ignores it.
   int motion_blur_samples = 8;
+};
+
+// How a frame is exposed, relative to SceneOptions: the camera's exposure
+// time and gain act on the sensor physically (before the shot noise for the
+// signal, after it for the gain), not on the finished image.
+struct SensorExposure {
+  // Signal electrons relative to SceneOptions::exposure (the exposure time
+  // over the nominal one): 2 = twice the photons, so sqrt(2) the shot noise.
+  double signal_scale = 1;
+  // Exposure time, seconds: the dark signal is dark_current_e_per_s times it.
+  double exposure_time_s = 0.01;
+  // Analogue gain, linear (DN per DN at unity gain): scales signal and noise
+  // alike, after the well; the ADC clips at its top level.
+  double gain = 1;
 };
 
 struct MarkerTruth {
@@ -156,6 +208,11 @@ struct RenderedFrame {
   std::vector<MarkerTruth> markers;
 };
 
+// The defocus blur of `options` for an object at depth_m (metres, > 0) seen
+// by a camera of focal length fx_px pixels: c / 4 in pixels (see
+// SceneOptions::f_number); 0 when f_number is 0.
+double defocus_sigma_px(const SceneOptions& options, double fx_px, double depth_m);
+
 class SceneRenderer {
  public:
   // Precomputes the per-pixel rays of the camera (once). Throws
@@ -168,13 +225,19 @@ class SceneRenderer {
   SceneRenderer& operator=(SceneRenderer&&) noexcept;
 
   // One frame from a static pose. The same pose and seed give the same image.
+  // Without `exposure`: SensorExposure{1, options.exposure_time_s, 1}.
   RenderedFrame render(const vision::Pose& T_cam_target, uint64_t seed) const;
+  RenderedFrame render(const vision::Pose& T_cam_target, uint64_t seed,
+                       const SensorExposure& exposure) const;
 
   // One frame during which the target moves from T_cam_target_start to
   // T_cam_target_end (rotation by slerp, translation linear), exposure spread
   // over options.motion_blur_samples poses. Ground truth at the middle pose.
   RenderedFrame render_moving(const vision::Pose& T_cam_target_start,
                               const vision::Pose& T_cam_target_end, uint64_t seed) const;
+  RenderedFrame render_moving(const vision::Pose& T_cam_target_start,
+                              const vision::Pose& T_cam_target_end, uint64_t seed,
+                              const SensorExposure& exposure) const;
 
   // The noise-free irradiance image before the sensor stage (CV_32FC1, in DN
   // units 0 .. 255 as the sensor would report without noise or quantization):

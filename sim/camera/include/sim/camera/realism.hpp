@@ -1,0 +1,133 @@
+// sim::camera realism profiles: how imperfect the simulated rig is, as data
+// (config/realism/{ideal,lab,paper}.toml), and the hidden truth drawn from it.
+//
+// The controller (rig sweep) only ever reads the *nominal* files: the
+// calibration, the rig geometry and the target layout named by its sweep
+// file. The simulator renders with a *true* camera, rig geometry and printed
+// sheet that differ from the nominal ones by seeded random amounts stated in
+// the profile, plus lens terms beyond the 5-parameter Brown-Conrady model
+// (thin prism), so that a calibration never fits exactly and a pose is never
+// exact, as on a real bench. `rig sim --write-truth FILE` writes that truth
+// (truth_json) for tests; nothing in rig/ reads it.
+//
+// Profile file (TOML; every key optional, its default is the "ideal" world,
+// i.e. exactly the nominal files and sim::scene::SceneOptions{}; a key or
+// table not listed is refused):
+//   name = "lab"                       # reported by the camera (device version)
+//   [camera_truth]                     # true camera = nominal + N(0, sigma)
+//   seed = 1                           # draws of [camera_truth] and [rig_truth]
+//   focal_sigma_rel = 0.003            # fx, fy each: fx_true = fx (1 + sigma z)
+//   principal_point_sigma_px = 2.0     # cx, cy each, pixels
+//   k1_sigma = 0.005                   # radial k1, dimensionless
+//   k2_sigma = 0.0                     # radial k2
+//   tangential_sigma = 0.0             # p1, p2 each
+//   thin_prism = [s1, s2, s3, s4]      # fixed extra terms (sim::scene::SceneOptions::thin_prism)
+//   [rig_truth]
+//   mount_rotation_sigma_deg = 0.2     # each axis of the camera mount's rotation vector
+//   mount_offset_sigma_mm = 0.5        # each axis of the camera's optical centre offset
+//   target_tilt_sigma_deg = 0.1        # each axis of the target's rotation vector
+//   target_origin_sigma_mm = 0.5       # each axis of the target origin
+//   [target]
+//   print_scale_error = 0.002          # the printed sheet is (1 + s) times its layout
+//   [light]   paper_reflectance, ink_reflectance, background_reflectance,
+//             lighting_gradient_per_m, lighting_direction_deg
+//   [optics]  blur_sigma_px, vignetting, f_number, focus_distance_m,
+//             pixel_pitch_um (SceneOptions::pixel_pitch_m in micrometres)
+//   [sensor]  exposure, full_well_electrons, read_noise_electrons, adc_bits, noise,
+//             dark_current_e_per_s, prnu_rel, dsnu_electrons, fixed_pattern_seed
+//   [bench.x], [bench.y]  backlash_mm, repeatability_mm, encoder_scale_ppm,
+//             thermal_drift_um_per_min, vibration_amplitude_mm,
+//             vibration_frequency_hz, vibration_decay_s
+// ([light], [optics], [sensor]: the sim::scene::SceneOptions fields of the same
+// names, with their units and ranges; [bench.*]: the sim::bench::AxisConfig
+// fields, which replace the bench file's [sim.x] / [sim.y] values when given.)
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "config/error.hpp"
+#include "sim/bench/config.hpp"
+#include "sim/scene/renderer.hpp"
+#include "vision/camera.hpp"
+#include "vision/rig_geometry.hpp"
+#include "vision/target.hpp"
+
+namespace sim::camera {
+
+// A profile that cannot be read, holds an unknown key or a value out of range.
+// The message names the file, the key, the value and what was expected.
+class RealismError : public config::ConfigError {
+ public:
+  using config::ConfigError::ConfigError;
+};
+
+// Standard deviations of the hidden truth around the nominal files. Every
+// value 0 (the default) makes the truth equal the nominal file exactly.
+struct TruthSpread {
+  uint64_t seed = 1;
+  double focal_sigma_rel = 0;           // relative, each of fx and fy
+  double principal_point_sigma_px = 0;  // pixels, each of cx and cy
+  double k1_sigma = 0;                  // dimensionless
+  double k2_sigma = 0;                  // dimensionless
+  double tangential_sigma = 0;          // dimensionless, each of p1 and p2
+  double mount_rotation_sigma_deg = 0;  // degrees, each component of the rotation vector
+  double mount_offset_sigma_mm = 0;     // mm, each bench axis
+  double target_tilt_sigma_deg = 0;     // degrees, each component
+  double target_origin_sigma_mm = 0;    // mm, each bench axis
+};
+
+// The bench's mechanical imperfections of one axis; an absent value keeps
+// the bench file's.
+struct AxisRealism {
+  std::optional<double> backlash_mm, repeatability_mm, encoder_scale_ppm, thermal_drift_um_per_min,
+      vibration_amplitude_mm, vibration_frequency_hz, vibration_decay_s;
+};
+
+struct RealismProfile {
+  std::string name = "ideal";
+  TruthSpread truth;
+  // Relative print scale error s of the sheet: everything printed is (1 + s)
+  // times its layout size (printer and paper shrink: 0.1-0.5 % is typical).
+  double print_scale_error = 0;
+  // Rendering: light, optics, sensor, and the thin-prism terms of the true lens.
+  scene::SceneOptions scene;
+  AxisRealism bench_x, bench_y;
+};
+
+// Replaces the bench's [sim.x] / [sim.y] imperfections by the profile's.
+void apply_bench_realism(const RealismProfile& profile, bench::BenchSimConfig* bench);
+
+// The ideal profile: the nominal files and the renderer's default options.
+RealismProfile ideal_realism();
+
+// Reads a profile file (format above; at most 1 MiB). Throws RealismError.
+RealismProfile load_realism_profile(const std::string& path);
+
+// What the simulator really renders with.
+struct SimTruth {
+  vision::Camera camera;               // true intrinsics and Brown-Conrady distortion
+  std::array<double, 4> thin_prism{};  // true extra lens terms s1..s4 (SceneOptions::thin_prism)
+  vision::RigGeometry geometry;        // true camera mount and target pose
+  vision::Target target;               // the sheet as printed (scaled by 1 + print_scale_error)
+  double print_scale_error = 0;
+};
+
+// Draws the truth from the nominal files with the profile's spreads (seeded by
+// profile.truth.seed: the same profile and files give the same truth).
+SimTruth draw_truth(const vision::Camera& nominal_camera,
+                    const vision::RigGeometry& nominal_geometry,
+                    const vision::Target& nominal_target, const RealismProfile& profile);
+
+// The target scaled by (1 + scale_error) about its frame's origin: marker
+// sides and centres, the sheet's size and origin.
+vision::Target scaled_target(const vision::Target& target, double scale_error);
+
+// The truth as JSON: profile name, camera (width, height, fx, fy, cx, cy, k1,
+// k2, p1, p2, k3, thin_prism), T_carriage_cam and T_bench_target (R row-major,
+// t in metres), print_scale_error.
+std::string truth_json(const SimTruth& truth, const RealismProfile& profile);
+
+}  // namespace sim::camera
