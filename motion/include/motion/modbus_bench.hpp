@@ -27,6 +27,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "motion/bench.hpp"
 #include "motion/bench_url.hpp"
@@ -71,12 +72,30 @@ class ModbusBench : public Bench {
   // Raises if the re-read state contradicts what was commanded; returns the
   // errno of a failed read (0 if none), after which the reconnect goes on.
   int check_state_after_reconnect(const BenchStatus& s);
+  // The BenchLinkError text for a link that stayed down: what failed, the
+  // last error, and what a person should check for it (link_hint).
+  std::string link_down_message(const char* what, bool first, int err) const;
+  std::string link_hint(int err) const;
   int read_feedback(BenchStatus& out);
   int read_targets(std::array<std::int32_t, 2>& counts);
   // Writes registers (address -> value), grouped into contiguous runs, and
   // reads every run back.
   void write_verified(const char* what, const std::map<int, std::uint16_t>& values);
-  void command(const char* what, std::uint16_t code);
+  // What shows that the drive took a command whose register it clears.
+  enum class Acceptance { kMotion, kHoming, kStill, kAlarmCleared };
+  // Writes a command code with the profile's handshake (kept: read back;
+  // self-clearing: acceptance seen in the status; pulse: set, acknowledge,
+  // clear), the servo-on bits held. `target`: where the command takes the
+  // bench, for kMotion and kHoming. Throws BenchWriteError.
+  void command(const char* what, std::uint16_t code, Acceptance kind,
+               const std::optional<XY>& target);
+  bool accepted(Acceptance kind, const BenchStatus& before, const BenchStatus& s,
+                const std::optional<XY>& target) const;
+  void write_unverified(const char* what, int address, std::uint16_t value);
+  // The profile's servo-on, written and awaited when the status shows the servo off.
+  void ensure_servo_on(const char* what);
+  // The bits kept set in every command: the servo-on once it was written.
+  std::uint16_t held_bits() const;
   BenchStatus decode_feedback(const std::uint16_t* block, int first) const;
 
   DriveProfile profile_;
@@ -91,6 +110,7 @@ class ModbusBench : public Bench {
   std::optional<XY> target_mm_;
   std::array<std::int32_t, 2> target_counts_{};
   bool homed_seen_ = false;
+  bool servo_enabled_ = false;
   int reconnects_ = 0;
 };
 

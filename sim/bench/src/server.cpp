@@ -14,6 +14,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "motion/errors.hpp"
+
 namespace sim::bench {
 namespace {
 
@@ -36,6 +38,15 @@ BenchServer::BenchServer(motion::DriveProfile profile, BenchSimConfig config,
       options_(std::move(options)),
       dynamics_(config_, profile_.home_x_mm, profile_.home_y_mm),
       faults_(config_.faults) {
+  // The simulated drive keeps its command register and uses 32-bit positions
+  // (docs/register-map.md); other conventions are emulated by the test drives.
+  if (profile_.position_bits != 32 || profile_.protocol.handshake != motion::CommandHandshake::kKept ||
+      profile_.protocol.servo_on != 0 || profile_.protocol.reset_pulse) {
+    throw motion::ProfileError(profile_.source +
+                               ": the simulated bench serves only 32-bit positions "
+                               "(units.position_bits = 32) and a command register that keeps "
+                               "its code (no [handshake] table)");
+  }
   const motion::RegisterMap& r = profile_.registers;
   const std::initializer_list<std::pair<int, int>> writes = {
       {r.target_x, 2}, {r.target_y, 2}, {r.speed, 1}, {r.command, 1}};
