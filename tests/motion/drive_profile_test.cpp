@@ -155,7 +155,7 @@ TEST(DriveProfile, MisspeltTableIsRefusedAndTheSimTableIsLeftToTheSimulatedBench
   EXPECT_NO_THROW(motion::parse_drive_profile(text, "p.toml"));  // has [sim]
   EXPECT_EQ(error_of(text + "\n[simm]\nseed = 1\n"),
             "p.toml: simm = { seed = 1 }: unknown key (misspelt?); expected one of name, link, "
-            "units, registers, status_bits, commands, motion, soft_limits, alarms, sim");
+            "units, registers, status_bits, commands, motion, soft_limits, handshake, alarms, sim");
 }
 
 TEST(DriveProfile, AProfileThatIsAFolderIsRefusedAsABadConfigurationFile) {

@@ -158,8 +158,9 @@ void check_camera_address(const std::string& address) {
         "sim camera: camera.address \"" + address +
         "\" is not the address (or name) of a network interface of this machine; it has " +
         ipv4_addresses_of(found) +
-        " (ip -brief addr). Use one of them, or add the address first, e.g. `sudo ip addr add " +
-        address + "/8 dev lo` for a loopback address");
+        " (ip -brief addr). Use one of them, or add the address to an interface first: `sudo ip "
+        "addr add " +
+        address + (address.rfind("127.", 0) == 0 ? "/8 dev lo`" : "/24 dev INTERFACE`"));
   }
   // Aravis binds the control port with address reuse and starts even when it
   // fails; a plain bind first tells that another camera holds the address.
