@@ -166,12 +166,13 @@ struct GigeSource::Impl {
       throw CaptureError(who, "device is not a GigE Vision camera");
     }
     // GigE Vision grants control to one application at a time; without it
-    // every register write times out.
+    // every register write times out. "refused": a sweep asks again
+    // (rig/sweep/sweep_camera.hpp), as a controller that died lets go.
     if (!arv_gv_device_is_controller(ARV_GV_DEVICE(arv_camera_get_device(camera)))) {
       g_object_unref(camera);
       camera = nullptr;
-      throw CaptureError(who, std::string("the camera answers but another process holds its "
-                                          "control channel: ") +
+      throw CaptureError(who, std::string("control of the camera refused: it answers, but "
+                                          "another process holds its control channel: ") +
                                   kHeldByAnother);
     }
   }

@@ -159,7 +159,9 @@ TEST_F(FirstUse, CameraHeldByAnotherProcessIsNamedAsTheLikelyCause) {
   const rig_test::RigRun r =
       run_rig("capture --camera gige:127.0.0.1 --frames 1 --out " + (dir_ / "frames").string());
   EXPECT_EQ(r.exit_code, 1);
-  expect_has(r.err, "another process holds its control channel");
+  expect_has(
+      r.err,
+      "control of the camera refused: it answers, but another process holds its control channel");
   expect_has(r.err, "another rig sweep or rig capture");
 }
 
