@@ -93,7 +93,7 @@ struct Timing {
 };
 
 // How the drive takes a code written to the command register
-// (docs/drive-profile.md#handshake).
+// (docs/drive-profile.md#handshake-optional).
 enum class CommandHandshake {
   // The register keeps the code written; the driver reads it back and compares.
   kKept,

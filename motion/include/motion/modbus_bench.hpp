@@ -7,7 +7,14 @@
 //    sent (SoftLimitError); a target inside is quantized to counts towards the
 //    inside, so no position outside the limits is ever written;
 //  - every write is read back and compared (BenchWriteError on a mismatch or
-//    a Modbus exception response);
+//    a Modbus exception response), except a command to a drive that clears
+//    its command register itself: its acceptance is read from the status
+//    instead. Commands follow the profile's [handshake]: kept, self-clearing,
+//    or an edge-triggered pulse (set, acknowledge, clear), with the servo-on
+//    bits written before the first home or move and kept set;
+//  - a link that stays down raises BenchLinkError naming the likely cause
+//    (nothing listening, no route, no serial device, no answer from the
+//    unit, garbled answers) and what to check;
 //  - reconnect watchdog: when the link fails (timeout, reset, EPIPE, garbled
 //    frame) the link is closed and re-opened with exponential backoff
 //    (10 ms doubling to 500 ms) for up to the profile's reconnect_timeout_ms.
