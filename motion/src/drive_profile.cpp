@@ -71,12 +71,13 @@ void check_link_and_units(const DriveProfile& p) {
 // fields of one table share a register.
 void check_registers(const DriveProfile& p) {
   const RegisterMap& r = p.registers;
-  std::vector<Span> holding = {{"registers.target_x", r.target_x, 2},
-                               {"registers.target_y", r.target_y, 2},
+  const int w = p.position_registers();
+  std::vector<Span> holding = {{"registers.target_x", r.target_x, w},
+                               {"registers.target_y", r.target_y, w},
                                {"registers.speed", r.speed, 1},
                                {"registers.command", r.command, 1}};
-  std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, 2},
-                                {"registers.actual_y", r.actual_y, 2},
+  std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, w},
+                                {"registers.actual_y", r.actual_y, w},
                                 {"registers.status", r.status, 1},
                                 {"registers.alarm", r.alarm, 1}};
   if (r.feedback == RegisterTable::kHolding) {
@@ -90,12 +91,16 @@ void check_registers(const DriveProfile& p) {
 
 void check_status_bits(const DriveProfile& p) {
   const StatusBits& b = p.status_bits;
-  const std::vector<std::pair<std::string, int>> bits = {
+  std::vector<std::pair<std::string, int>> bits = {
       {"status_bits.homed", b.homed},
       {"status_bits.moving", b.moving},
       {"status_bits.in_position", b.in_position},
       {"status_bits.alarm", b.alarm},
       {"status_bits.emergency_stop", b.emergency_stop}};
+  if (p.protocol.ack_bit >= 0) bits.push_back({"handshake.ack_bit", p.protocol.ack_bit});
+  if (p.protocol.servo_ready_bit >= 0) {
+    bits.push_back({"handshake.servo_ready_bit", p.protocol.servo_ready_bit});
+  }
   for (size_t i = 0; i < bits.size(); ++i) {
     const auto& [field, bit] = bits[i];
     if (bit < 0 || bit > 15) fail(p, field, std::to_string(bit), "a bit of a register (0..15)");
@@ -115,8 +120,20 @@ void check_command_codes(const DriveProfile& p) {
       {"commands.home", c.home},
       {"commands.stop", c.stop},
       {"commands.reset_alarm", c.reset_alarm}};
+  const CommandProtocol& h = p.protocol;
   for (size_t i = 0; i < codes.size(); ++i) {
     const auto& [field, code] = codes[i];
+    if (code == 0 && h.handshake != CommandHandshake::kKept) {
+      fail(p, field, "0", "a code other than 0",
+           "0 is the cleared command register of handshake.command = \"" +
+               std::string(h.handshake == CommandHandshake::kPulse ? "pulse" : "self_clearing") +
+               "\"");
+    }
+    if ((code & h.servo_on) != 0) {
+      fail(p, field, std::to_string(code),
+           "a code sharing no bit with handshake.servo_on (" + std::to_string(h.servo_on) + ")",
+           "the servo-on bits are kept set in every command");
+    }
     for (size_t j = 0; j < i; ++j) {
       if (code == codes[j].second) {
         fail(p, field, std::to_string(code), "a code that no other command uses",
@@ -148,16 +165,38 @@ void check_speeds_and_tolerance(const DriveProfile& p) {
   }
 }
 
+void check_handshake(const DriveProfile& p) {
+  const CommandProtocol& h = p.protocol;
+  if (h.servo_on != 0 && h.servo_ready_bit < 0) {
+    throw ProfileError(p.source +
+                       ": handshake.servo_ready_bit: missing; expected the status bit (0..15) "
+                       "the drive sets once the servo is on, with handshake.servo_on");
+  }
+  if (h.servo_on == 0 && h.servo_ready_bit >= 0) {
+    fail(p, "handshake.servo_ready_bit", std::to_string(h.servo_ready_bit),
+         "no servo_ready_bit without handshake.servo_on", "there is no servo-on to wait for");
+  }
+  if (h.ack_bit >= 0 && h.handshake != CommandHandshake::kPulse) {
+    fail(p, "handshake.ack_bit", std::to_string(h.ack_bit),
+         "an ack_bit only with handshake.command = \"pulse\"");
+  }
+}
+
 // Soft limits that fit the position registers, are not empty and hold home.
 void check_soft_limits(const DriveProfile& p) {
   const SoftLimits& s = p.soft_limits;
+  const double max_counts = p.position_bits == 16 ? std::numeric_limits<std::int16_t>::max() - 1.0
+                                                  : std::numeric_limits<std::int32_t>::max() - 1.0;
   for (auto [name, v] : {std::pair<const char*, double>{"soft_limits.x_min_mm", s.x_min_mm},
                          {"soft_limits.x_max_mm", s.x_max_mm},
                          {"soft_limits.y_min_mm", s.y_min_mm},
                          {"soft_limits.y_max_mm", s.y_max_mm}}) {
     const double counts = v * p.counts_per_mm;
-    if (!std::isfinite(v) || std::fabs(counts) > std::numeric_limits<std::int32_t>::max() - 1.0) {
-      fail(p, name, format_number(v), "a limit that fits in a signed 32-bit position register");
+    if (!std::isfinite(v) || std::fabs(counts) > max_counts) {
+      fail(p, name, format_number(v),
+           "a limit that fits in a signed " + std::to_string(p.position_bits) +
+               "-bit position register (|limit| <= " + format_number(max_counts / p.counts_per_mm) +
+               " mm at units.counts_per_mm = " + format_number(p.counts_per_mm) + ")");
     }
   }
   if (!(s.x_min_mm < s.x_max_mm)) {
@@ -211,6 +250,19 @@ void encode_int32(std::int32_t value, WordOrder order, std::uint16_t out[2]) {
   out[1] = order == WordOrder::kHighFirst ? low : high;
 }
 
+void DriveProfile::encode_position(std::int32_t counts, std::uint16_t out[2]) const {
+  if (position_bits == 16) {
+    out[0] = static_cast<std::uint16_t>(static_cast<std::int16_t>(counts));
+    return;
+  }
+  encode_int32(counts, word_order, out);
+}
+
+std::int32_t DriveProfile::decode_position(const std::uint16_t in[2]) const {
+  if (position_bits == 16) return static_cast<std::int16_t>(in[0]);
+  return decode_int32(in, word_order);
+}
+
 std::int32_t decode_int32(const std::uint16_t in[2], WordOrder order) {
   const std::uint32_t high = order == WordOrder::kHighFirst ? in[0] : in[1];
   const std::uint32_t low = order == WordOrder::kHighFirst ? in[1] : in[0];
@@ -221,6 +273,7 @@ void validate(const DriveProfile& p) {
   check_link_and_units(p);
   check_registers(p);
   check_status_bits(p);
+  check_handshake(p);
   check_command_codes(p);
   check_speeds_and_tolerance(p);
   check_soft_limits(p);
@@ -243,6 +296,9 @@ void read_link(config::Table link, DriveProfile* p) {
 void read_units(config::Table units, DriveProfile* p) {
   p->counts_per_mm = units.number("counts_per_mm", config::positive());
   p->speed_units_per_mm_s = units.number("speed_units_per_mm_s", config::positive());
+  const std::int64_t bits = units.integer_or("position_bits", 32, 16, 32, "16 or 32");
+  if (bits != 16 && bits != 32) units.fail("position_bits", "16 or 32");
+  p->position_bits = static_cast<int>(bits);
   units.reject_unknown();
 }
 
@@ -303,6 +359,24 @@ void read_soft_limits(config::Table lim, SoftLimits* s) {
   lim.reject_unknown();
 }
 
+// [handshake] (optional): the drive's command conventions.
+void read_handshake(config::Table h, CommandProtocol* c) {
+  const std::string mode = h.choice_or("command", "kept", {"kept", "self_clearing", "pulse"});
+  c->handshake = mode == "kept"            ? CommandHandshake::kKept
+                 : mode == "self_clearing" ? CommandHandshake::kSelfClearing
+                                           : CommandHandshake::kPulse;
+  c->accept_timeout_ms =
+      static_cast<int>(h.integer_or("accept_timeout_ms", c->accept_timeout_ms, 1, 600000));
+  if (h.has("ack_bit")) c->ack_bit = static_cast<int>(h.integer("ack_bit", 0, 15));
+  c->pulse_ms = static_cast<int>(h.integer_or("pulse_ms", c->pulse_ms, 1, 10000));
+  c->servo_on = static_cast<std::uint16_t>(h.integer_or("servo_on", 0, 0, 65535));
+  if (h.has("servo_ready_bit")) {
+    c->servo_ready_bit = static_cast<int>(h.integer("servo_ready_bit", 0, 15));
+  }
+  c->reset_pulse = h.choice_or("reset", "command", {"command", "pulse"}) == "pulse";
+  h.reject_unknown();
+}
+
 // [alarms]: code = "meaning", codes in decimal or hex as drive manuals write them.
 void read_alarms(config::Table alarms, std::map<int, std::string>* meanings) {
   for (const auto& [code, meaning] :
@@ -323,6 +397,7 @@ DriveProfile read_profile(const config::Document& file) {
   read_commands(root.table("commands"), &p.commands);
   read_motion(root.table("motion"), &p);
   read_soft_limits(root.table("soft_limits"), &p.soft_limits);
+  read_handshake(root.optional_table("handshake"), &p.protocol);
   read_alarms(root.optional_table("alarms"), &p.alarm_meanings);
   root.ignore("sim");  // the simulated bench's own table (sim/bench/config.hpp)
   root.reject_unknown();

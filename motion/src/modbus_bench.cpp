@@ -2,6 +2,7 @@
 // watchdog (see modbus_bench.hpp).
 #include "motion/modbus_bench.hpp"
 
+#include <modbus/modbus.h>
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -42,8 +43,9 @@ ModbusBench::ModbusBench(const BenchUrl& url, DriveProfile profile)
             milliseconds(profile_.timing.response_timeout_ms)),
       speed_mm_s_(profile_.default_speed_mm_s) {
   const RegisterMap& r = profile_.registers;
+  const int w = profile_.position_registers();
   const int first = std::min({r.actual_x, r.actual_y, r.status, r.alarm});
-  const int last = std::max({r.actual_x + 1, r.actual_y + 1, r.status, r.alarm});
+  const int last = std::max({r.actual_x + w - 1, r.actual_y + w - 1, r.status, r.alarm});
   if (last - first + 1 <= kMaxReadRegisters) {
     feedback_first_ = first;
     feedback_count_ = last - first + 1;
@@ -80,10 +82,60 @@ void ModbusBench::reconnect(const char* what, bool first) {
     std::this_thread::sleep_for(backoff);
     backoff = std::min(backoff * 2, kBackoffMax);
   }
-  throw BenchLinkError("bench " + link_.url().str() + ": link down during " + what +
-                       ", not re-established within link.reconnect_timeout_ms = " +
-                       std::to_string(profile_.timing.reconnect_timeout_ms) +
-                       " ms: " + ModbusLink::describe(err));
+  throw BenchLinkError(link_down_message(what, first, err));
+}
+
+std::string ModbusBench::link_down_message(const char* what, bool first, int err) const {
+  const BenchUrl& url = link_.url();
+  const std::string window =
+      "link.reconnect_timeout_ms = " + std::to_string(profile_.timing.reconnect_timeout_ms) + " ms";
+  std::string msg = "bench " + url.str() + ": ";
+  msg += first ? "cannot connect (tried for " + window + ")"
+               : std::string("link down during ") + what + ", not re-established within " + window;
+  msg += ": " + ModbusLink::describe(err) + ": " + link_hint(err);
+  return msg;
+}
+
+std::string ModbusBench::link_hint(int err) const {
+  const BenchUrl& url = link_.url();
+  const bool tcp = url.transport == BenchUrl::Transport::kTcp;
+  const std::string unit = std::to_string(url.unit.value_or(profile_.unit_id));
+  const std::string timeout =
+      "link.response_timeout_ms = " + std::to_string(profile_.timing.response_timeout_ms) + " ms";
+  if (tcp && err == ECONNREFUSED) {
+    return "nothing listens at " + url.host + ":" + std::to_string(url.port) +
+           ". Is the bench (or its Modbus gateway) switched on and at that address, or, for the "
+           "simulated rig, is `rig sim` (or `rig sim bench`) running?";
+  }
+  if (tcp && (err == EHOSTUNREACH || err == ENETUNREACH)) {
+    return "no route to " + url.host + ": check the address and the network cable";
+  }
+  if (!tcp && (err == ENOENT || err == ENODEV || err == ENXIO)) {
+    return "no serial device " + url.device + ": is the adapter plugged in (ls /dev/serial/by-id)?";
+  }
+  if (!tcp && err == EACCES) {
+    return "this user may not open " + url.device +
+           " (add it to the group that owns the device, "
+           "usually dialout)";
+  }
+  if (err == ETIMEDOUT) {
+    return tcp ? "no answer from unit " + unit + " within " + timeout +
+                     ": is the address that of the bench, and its unit id that of link.unit_id "
+                     "(or the URL's ?unit=)?"
+               : "no answer from unit " + unit + " on " + url.device + " at " +
+                     std::to_string(url.baud) + " baud, parity " + url.parity + ", " +
+                     std::to_string(url.data_bits) + " data and " + std::to_string(url.stop_bits) +
+                     " stop bits within " + timeout +
+                     ": check the drive's unit id (link.unit_id or ?unit=), that baud, parity and "
+                     "stop bits match the drive's serial settings, and the wiring (A/B swapped?)";
+  }
+  if (err == EMBBADCRC || err == EMBBADDATA || err == EMBBADSLAVE) {
+    return tcp ? "the answers are not the drive's Modbus: is this port a Modbus TCP server?"
+               : "garbled answers: baud, parity or stop bits of the URL differ from the drive's, "
+                 "or two devices share unit " +
+                     unit;
+  }
+  return "check that the bench is switched on and connected";
 }
 
 int ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
@@ -148,9 +200,10 @@ BenchStatus ModbusBench::decode_feedback(const std::uint16_t* block, int first) 
   const RegisterMap& r = profile_.registers;
   const StatusBits& b = profile_.status_bits;
   BenchStatus s;
-  s.position.x_mm = profile_.to_mm(decode_int32(block + (r.actual_x - first), profile_.word_order));
-  s.position.y_mm = profile_.to_mm(decode_int32(block + (r.actual_y - first), profile_.word_order));
+  s.position.x_mm = profile_.to_mm(profile_.decode_position(block + (r.actual_x - first)));
+  s.position.y_mm = profile_.to_mm(profile_.decode_position(block + (r.actual_y - first)));
   const std::uint16_t bits = block[r.status - first];
+  s.status_word = bits;
   auto bit = [bits](int n) { return ((bits >> n) & 1u) != 0; };
   s.homed = bit(b.homed);
   s.moving = bit(b.moving);
@@ -172,8 +225,9 @@ int ModbusBench::read_feedback(BenchStatus& out) {
   }
   // Scattered map: one read per field, assembled into a block indexed from 0.
   std::vector<std::uint16_t> block(65537, 0);
+  const int w = profile_.position_registers();
   for (auto [addr, n] :
-       {std::pair<int, int>{r.actual_x, 2}, {r.actual_y, 2}, {r.status, 1}, {r.alarm, 1}}) {
+       {std::pair<int, int>{r.actual_x, w}, {r.actual_y, w}, {r.status, 1}, {r.alarm, 1}}) {
     if (const int err = link_.read(r.feedback, addr, n, block.data() + addr); err != 0) return err;
   }
   out = decode_feedback(block.data(), 0);
@@ -182,10 +236,11 @@ int ModbusBench::read_feedback(BenchStatus& out) {
 
 int ModbusBench::read_targets(std::array<std::int32_t, 2>& counts) {
   const RegisterMap& r = profile_.registers;
+  const int w = profile_.position_registers();
   std::uint16_t x[2], y[2];
-  if (int err = link_.read(RegisterTable::kHolding, r.target_x, 2, x); err != 0) return err;
-  if (int err = link_.read(RegisterTable::kHolding, r.target_y, 2, y); err != 0) return err;
-  counts = {decode_int32(x, profile_.word_order), decode_int32(y, profile_.word_order)};
+  if (int err = link_.read(RegisterTable::kHolding, r.target_x, w, x); err != 0) return err;
+  if (int err = link_.read(RegisterTable::kHolding, r.target_y, w, y); err != 0) return err;
+  counts = {profile_.decode_position(x), profile_.decode_position(y)};
   return 0;
 }
 
@@ -226,8 +281,118 @@ void ModbusBench::write_verified(const char* what, const std::map<int, std::uint
   }
 }
 
-void ModbusBench::command(const char* what, std::uint16_t code) {
-  write_verified(what, {{profile_.registers.command, code}});
+std::uint16_t ModbusBench::held_bits() const {
+  return servo_enabled_ ? profile_.protocol.servo_on : 0;
+}
+
+void ModbusBench::ensure_servo_on(const char* what) {
+  const CommandProtocol& h = profile_.protocol;
+  if (h.servo_on == 0) return;
+  // Read every time: a drive that restarted, or tripped, drops the servo.
+  if ((status().status_word >> h.servo_ready_bit) & 1u) {
+    servo_enabled_ = true;
+    return;
+  }
+  servo_enabled_ = true;
+  write_verified(what, {{profile_.registers.command, h.servo_on}});
+  const auto deadline = Clock::now() + milliseconds(h.accept_timeout_ms);
+  for (;;) {
+    const BenchStatus s = status();
+    if ((s.status_word >> h.servo_ready_bit) & 1u) return;
+    if (s.alarm || Clock::now() >= deadline) {
+      servo_enabled_ = false;
+      throw BenchWriteError(
+          "bench " + link_.url().str() + ": " + what + ": servo not on (status bit " +
+          std::to_string(h.servo_ready_bit) + " = handshake.servo_ready_bit still 0) " +
+          (s.alarm ? "and alarm " + std::to_string(s.alarm_code) + " (" + s.alarm_meaning + ")"
+                   : "within handshake.accept_timeout_ms = " + std::to_string(h.accept_timeout_ms) +
+                         " ms") +
+          " after writing handshake.servo_on = " + std::to_string(h.servo_on) +
+          " to the command register: is the drive's main power on and its emergency stop "
+          "released?");
+    }
+    std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
+  }
+}
+
+void ModbusBench::write_unverified(const char* what, int address, std::uint16_t value) {
+  const int err = transact(what, [&] { return link_.write(address, 1, &value); });
+  if (err != 0) {
+    throw BenchWriteError("bench " + link_.url().str() + ": " + what + ": the drive refused " +
+                          "holding register " + std::to_string(address) + ": " +
+                          ModbusLink::describe(err));
+  }
+}
+
+bool ModbusBench::accepted(Acceptance kind, const BenchStatus& before, const BenchStatus& s,
+                           const std::optional<XY>& target) const {
+  if (s.alarm || s.emergency_stop) return true;  // the drive's answer; wait_settled reports it
+  const double tol = profile_.position_tolerance_mm + 1e-6;
+  const bool at_target = target && std::fabs(s.position.x_mm - target->x_mm) <= tol &&
+                         std::fabs(s.position.y_mm - target->y_mm) <= tol;
+  switch (kind) {
+    case Acceptance::kMotion:
+      // Moving, or in position lost, or already there (a move shorter than
+      // one poll interval, or to where the bench stands).
+      return s.moving || (before.in_position && !s.in_position) ||
+             (at_target && s.in_position && !s.moving);
+    case Acceptance::kHoming:
+      return s.moving || (before.homed && !s.homed) || (at_target && s.homed && !s.moving);
+    case Acceptance::kStill:
+      return !s.moving;
+    case Acceptance::kAlarmCleared:
+      return !s.alarm;
+  }
+  return false;
+}
+
+void ModbusBench::command(const char* what, std::uint16_t code, Acceptance kind,
+                          const std::optional<XY>& target) {
+  const CommandProtocol& h = profile_.protocol;
+  const int reg = profile_.registers.command;
+  const auto word = static_cast<std::uint16_t>(code | held_bits());
+  if (h.handshake == CommandHandshake::kKept) {
+    write_verified(what, {{reg, word}});
+    return;
+  }
+  const BenchStatus before = status();
+  const auto deadline = Clock::now() + milliseconds(h.accept_timeout_ms);
+  if (h.handshake == CommandHandshake::kSelfClearing) {
+    write_unverified(what, reg, word);
+    for (;;) {
+      const BenchStatus s = status();
+      if (accepted(kind, before, s, target)) return;
+      if (Clock::now() >= deadline) {
+        throw BenchWriteError(
+            "bench " + link_.url().str() + ": " + what + ": the drive did not take command " +
+            std::to_string(word) + " within handshake.accept_timeout_ms = " +
+            std::to_string(h.accept_timeout_ms) + " ms (the status shows no sign of it: moving " +
+            std::to_string(s.moving) + ", in position " + std::to_string(s.in_position) +
+            ", homed " + std::to_string(s.homed) + ")");
+      }
+      std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
+    }
+  }
+  // Edge-triggered: set, wait for the acknowledge (or hold pulse_ms), clear.
+  write_verified(what, {{reg, word}});
+  if (h.ack_bit < 0) {
+    std::this_thread::sleep_for(milliseconds(h.pulse_ms));
+  } else {
+    for (;;) {
+      const BenchStatus s = status();
+      if (((s.status_word >> h.ack_bit) & 1u) || s.alarm) break;
+      if (Clock::now() >= deadline) {
+        write_verified(what, {{reg, held_bits()}});
+        throw BenchWriteError("bench " + link_.url().str() + ": " + what +
+                              ": the drive did not acknowledge command " + std::to_string(word) +
+                              " (status bit " + std::to_string(h.ack_bit) +
+                              " = handshake.ack_bit) within handshake.accept_timeout_ms = " +
+                              std::to_string(h.accept_timeout_ms) + " ms");
+      }
+      std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
+    }
+  }
+  write_verified(what, {{reg, held_bits()}});
 }
 
 void ModbusBench::set_speed(double speed_mm_s) {
@@ -263,29 +428,34 @@ void ModbusBench::move_to(double x_mm, double y_mm) {
 
   const RegisterMap& r = profile_.registers;
   std::map<int, std::uint16_t> regs;
+  const int w = profile_.position_registers();
   std::uint16_t words[2];
-  encode_int32(counts[0], profile_.word_order, words);
-  regs[r.target_x] = words[0];
-  regs[r.target_x + 1] = words[1];
-  encode_int32(counts[1], profile_.word_order, words);
-  regs[r.target_y] = words[0];
-  regs[r.target_y + 1] = words[1];
+  for (auto [addr, c] :
+       {std::pair<int, std::int32_t>{r.target_x, counts[0]}, {r.target_y, counts[1]}}) {
+    profile_.encode_position(c, words);
+    for (int i = 0; i < w; ++i)
+      regs[addr + i] = words[i];
+  }
   regs[r.speed] =
       static_cast<std::uint16_t>(std::lround(speed_mm_s_ * profile_.speed_units_per_mm_s));
 
   // The previous target no longer describes the drive while this one is being
   // written: a reconnect in between re-reads and resumes the write.
   pending_ = Pending::kNone;
+  ensure_servo_on("move_to");
   write_verified("move_to (targets)", regs);
-  command("move_to (command)", profile_.commands.move_absolute);
+  const XY target{profile_.to_mm(counts[0]), profile_.to_mm(counts[1])};
+  command("move_to (command)", profile_.commands.move_absolute, Acceptance::kMotion, target);
   pending_ = Pending::kMove;
   target_counts_ = counts;
-  target_mm_ = XY{profile_.to_mm(counts[0]), profile_.to_mm(counts[1])};
+  target_mm_ = target;
 }
 
 void ModbusBench::home() {
   pending_ = Pending::kNone;
-  command("home", profile_.commands.home);
+  ensure_servo_on("home");
+  command("home", profile_.commands.home, Acceptance::kHoming,
+          XY{profile_.home_x_mm, profile_.home_y_mm});
   // The drive loses its reference while it homes; from here homed is
   // re-learnt from the drive.
   homed_seen_ = false;
@@ -294,13 +464,23 @@ void ModbusBench::home() {
 }
 
 void ModbusBench::stop() {
-  command("stop", profile_.commands.stop);
+  command("stop", profile_.commands.stop, Acceptance::kStill, std::nullopt);
   pending_ = Pending::kStop;
   target_mm_.reset();
 }
 
 void ModbusBench::reset_alarm() {
-  command("reset_alarm", profile_.commands.reset_alarm);
+  const CommandProtocol& h = profile_.protocol;
+  if (h.reset_pulse) {
+    // A reset on the rising edge: set, hold, clear (keeping the servo on).
+    write_verified("reset_alarm (pulse set)",
+                   {{profile_.registers.command,
+                     static_cast<std::uint16_t>(profile_.commands.reset_alarm | held_bits())}});
+    std::this_thread::sleep_for(milliseconds(h.pulse_ms));
+    write_verified("reset_alarm (pulse clear)", {{profile_.registers.command, held_bits()}});
+  } else {
+    command("reset_alarm", profile_.commands.reset_alarm, Acceptance::kAlarmCleared, std::nullopt);
+  }
   const BenchStatus s = status();
   if (s.alarm) {
     throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +

@@ -155,7 +155,7 @@ TEST(DriveProfile, MisspeltTableIsRefusedAndTheSimTableIsLeftToTheSimulatedBench
   EXPECT_NO_THROW(motion::parse_drive_profile(text, "p.toml"));  // has [sim]
   EXPECT_EQ(error_of(text + "\n[simm]\nseed = 1\n"),
             "p.toml: simm = { seed = 1 }: unknown key (misspelt?); expected one of name, link, "
-            "units, registers, status_bits, commands, motion, soft_limits, alarms, sim");
+            "units, registers, status_bits, commands, motion, soft_limits, handshake, alarms, sim");
 }
 
 TEST(DriveProfile, AProfileThatIsAFolderIsRefusedAsABadConfigurationFile) {
@@ -179,6 +179,73 @@ TEST(DriveProfile, WordOrdersRoundTripNegativeValues) {
   EXPECT_EQ(w[0], 0x5678);
   EXPECT_EQ(w[1], 0x1234);
   EXPECT_EQ(motion::decode_int32(w, motion::WordOrder::kLowFirst), 0x12345678);
+}
+
+const std::string kHandshake = std::string(RIG_SOURCE_DIR) + "/tests/motion/handshake_drive.toml";
+
+// The handshake emulator's profile with one line replaced.
+std::string handshake_with(const std::string& line_regex, const std::string& replacement) {
+  const std::string text = read(kHandshake);
+  std::string out = std::regex_replace(text, std::regex(line_regex), replacement);
+  EXPECT_NE(out, text) << "pattern " << line_regex << " matched nothing";
+  return out;
+}
+
+TEST(DriveProfile, HandshakeTableAndHexIntegersAreRead) {
+  const motion::DriveProfile p = motion::load_drive_profile(kHandshake);
+  EXPECT_EQ(p.registers.command, 0x105);  // written 0x105 in the file
+  EXPECT_EQ(p.commands.reset_alarm, 8);   // 0x08
+  EXPECT_EQ(p.protocol.handshake, motion::CommandHandshake::kSelfClearing);
+  EXPECT_EQ(p.protocol.servo_on, 0x10);
+  EXPECT_EQ(p.protocol.servo_ready_bit, 7);
+  EXPECT_FALSE(p.protocol.reset_pulse);
+  EXPECT_EQ(p.alarm_meaning(177), "servo off: command while the servo was not ready");
+  // Without [handshake], rig's own convention: the register keeps the code.
+  const motion::DriveProfile sim = motion::load_drive_profile(kSim);
+  EXPECT_EQ(sim.protocol.handshake, motion::CommandHandshake::kKept);
+  EXPECT_EQ(sim.protocol.servo_on, 0);
+  EXPECT_EQ(sim.position_bits, 32);
+}
+
+TEST(DriveProfile, InconsistentHandshakesAreRefusedByName) {
+  EXPECT_EQ(error_of(handshake_with("servo_ready_bit = 7[^\n]*", "")),
+            "p.toml: handshake.servo_ready_bit: missing; expected the status bit (0..15) the "
+            "drive sets once the servo is on, with handshake.servo_on");
+  EXPECT_EQ(error_of(handshake_with("servo_ready_bit = 7", "servo_ready_bit = 5")),
+            "p.toml: handshake.servo_ready_bit = 5: bit 5 is also status_bits.moving; expected a "
+            "bit that no other status uses");
+  EXPECT_EQ(error_of(handshake_with("home = 0x02", "home = 0x12")),
+            "p.toml: commands.home = 18: the servo-on bits are kept set in every command; "
+            "expected a code sharing no bit with handshake.servo_on (16)");
+  EXPECT_EQ(error_of(handshake_with("stop = 0x04", "stop = 0")),
+            "p.toml: commands.stop = 0: 0 is the cleared command register of handshake.command "
+            "= \"self_clearing\"; expected a code other than 0");
+  EXPECT_EQ(error_of(handshake_with("command = \"self_clearing\"", "command = \"toggle\"")),
+            "p.toml: handshake.command = \"toggle\": expected \"kept\", \"self_clearing\" or "
+            "\"pulse\"");
+  EXPECT_EQ(
+      error_of(handshake_with("command = \"self_clearing\"", "command = \"kept\"\nack_bit = 6")),
+      "p.toml: handshake.ack_bit = 6: expected an ack_bit only with handshake.command = "
+      "\"pulse\"");
+}
+
+TEST(DriveProfile, SixteenBitPositionsTakeOneRegisterAndBoundTheSoftLimits) {
+  // One signed register at 100 counts/mm holds +-327.67 mm.
+  const std::string one_register = handshake_with("position_bits = 32", "position_bits = 16");
+  const motion::DriveProfile p = motion::parse_drive_profile(
+      std::regex_replace(one_register, std::regex("target_y = 0x102"), "target_y = 0x101"),
+      "p.toml");
+  EXPECT_EQ(p.position_registers(), 1);
+  std::uint16_t w[2] = {0, 0};
+  p.encode_position(-1234, w);
+  EXPECT_EQ(w[0], 0x10000 - 1234);
+  EXPECT_EQ(p.decode_position(w), -1234);
+  EXPECT_EQ(
+      error_of(std::regex_replace(one_register, std::regex("x_max_mm = 200"), "x_max_mm = 400")),
+      "p.toml: soft_limits.x_max_mm = 400: expected a limit that fits in a signed 16-bit "
+      "position register (|limit| <= 327.66 mm at units.counts_per_mm = 100)");
+  EXPECT_EQ(error_of(handshake_with("position_bits = 32", "position_bits = 24")),
+            "p.toml: units.position_bits = 24: expected 16 or 32");
 }
 
 }  // namespace

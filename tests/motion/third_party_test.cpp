@@ -4,9 +4,12 @@
 //  - a drive emulated with Debian's pymodbus (low word first, 0.01 mm, all
 //    holding registers) is driven through its profile file;
 //  - the simulated bench over Modbus RTU, through a socat pseudo-terminal pair.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
 #include <sys/stat.h>
+#include <termios.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -205,10 +208,43 @@ TEST_F(RtuOverPty, RequestsForAnotherUnitAreNotAnswered) {
   options_.rtu_device = dir_ + "/bench";
   start_server();
   profile_.timing.reconnect_timeout_ms = 200;
-  EXPECT_THROW(motion::ModbusBench(motion::BenchUrl::parse("modbus-rtu://" + dir_ +
-                                                           "/driver?baud=115200&parity=N&unit=7"),
-                                   profile_),
-               motion::BenchLinkError);
+  try {
+    motion::ModbusBench bench(
+        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=115200&parity=N&unit=7"),
+        profile_);
+    FAIL() << "unit 7 answered; the simulated bench is unit 1";
+  } catch (const motion::BenchLinkError& e) {
+    // The message names the unit and the serial settings to check.
+    const std::string what = e.what();
+    EXPECT_NE(what.find("no answer from unit 7 on " + dir_ +
+                        "/driver at 115200 baud, parity N, 8 data and 2 stop bits"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find("check the drive's unit id"), std::string::npos) << what;
+  }
+}
+
+TEST_F(RtuOverPty, TheUrlsBaudAndStopBitsReachTheSerialLine) {
+  // A pty carries bytes whatever its settings, so the bench still answers;
+  // what the URL set is read back from the line's termios. A mismatched baud
+  // rate cannot be shown on a pty (it ignores the rate); on a real line it
+  // garbles or loses the answers, which the driver reports as such.
+  options_.rtu_device = dir_ + "/bench";
+  start_server();
+  motion::ModbusBench bench(
+      motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=38400&parity=E&stop=2"),
+      profile_);
+  EXPECT_FALSE(bench.status().alarm);
+  const int fd = open((dir_ + "/driver").c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
+  ASSERT_GE(fd, 0);
+  termios line{};
+  ASSERT_EQ(tcgetattr(fd, &line), 0);
+  close(fd);
+  EXPECT_EQ(cfgetospeed(&line), static_cast<speed_t>(B38400));
+  EXPECT_EQ(cfgetispeed(&line), static_cast<speed_t>(B38400));
+  EXPECT_TRUE(line.c_cflag & CSTOPB);  // 2 stop bits
+  // Parity cannot be read back here: Linux's pty driver forces CS8 without
+  // PARENB whatever is set (drivers/tty/pty.c, pty_set_termios).
 }
 
 }  // namespace

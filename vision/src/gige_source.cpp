@@ -58,9 +58,22 @@ void on_control_lost(ArvDevice* /*device*/, gpointer flag) {
   static_cast<std::atomic<bool>*>(flag)->store(true);
 }
 
-// Throws CaptureError, taking `error`, when the camera refused `what`.
+// What to do about a camera another application controls.
+constexpr const char* kHeldByAnother =
+    "most likely another rig sweep or rig capture (or arv-viewer) is using it. Stop that one; "
+    "a controller that died releases the camera once its heartbeat times out (a few seconds)";
+
+// Throws CaptureError, taking `error`, when the camera refused `what`. A
+// write that times out on a camera that answered discovery is most often a
+// camera another application controls.
 void check(GError* error, const std::string& who, const std::string& what) {
-  if (error != nullptr) throw CaptureError(who, what + " refused: " + take_message(error));
+  if (error == nullptr) return;
+  const std::string message = take_message(error);
+  const bool timeout = message.find("timeout") != std::string::npos;
+  throw CaptureError(who, what + " refused: " + message +
+                              (timeout ? std::string(" (the camera did not answer the write: ") +
+                                             kHeldByAnother + ")"
+                                       : std::string()));
 }
 
 // The id as Aravis's discovery lists it: vendor-model-serial.
@@ -142,12 +155,25 @@ struct GigeSource::Impl {
     GError* error = nullptr;
     camera = arv_camera_new(device.c_str(), &error);
     if (camera == nullptr)
-      throw CaptureError(who, "no GigE Vision camera answers (" + take_message(error) +
-                                  "); `arv-tool-0.8` lists the cameras Aravis can see");
+      throw CaptureError(who, "no GigE Vision camera answers at " + device + " (" +
+                                  take_message(error) +
+                                  "): is the camera powered and on this network, or, for the "
+                                  "simulated rig, is `rig sim` running? `arv-tool-0.8` lists "
+                                  "the cameras Aravis can see");
     if (!arv_camera_is_gv_device(camera)) {
       g_object_unref(camera);
       camera = nullptr;
       throw CaptureError(who, "device is not a GigE Vision camera");
+    }
+    // GigE Vision grants control to one application at a time; without it
+    // every register write times out. "refused": a sweep asks again
+    // (rig/sweep/sweep_camera.hpp), as a controller that died lets go.
+    if (!arv_gv_device_is_controller(ARV_GV_DEVICE(arv_camera_get_device(camera)))) {
+      g_object_unref(camera);
+      camera = nullptr;
+      throw CaptureError(who, std::string("control of the camera refused: it answers, but "
+                                          "another process holds its control channel: ") +
+                                  kHeldByAnother);
     }
   }
 

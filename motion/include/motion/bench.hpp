@@ -25,6 +25,7 @@ struct BenchStatus {
   bool emergency_stop = false;
   int alarm_code = 0;         // 0 = none
   std::string alarm_meaning;  // from the profile's [alarms] table; empty when code is 0
+  unsigned status_word = 0;   // the status register as read, for drive-specific bits
 };
 
 class Bench {

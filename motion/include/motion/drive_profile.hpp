@@ -5,8 +5,10 @@
 //
 // Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
 // Positions are signed 32-bit two's complement counts in two consecutive
-// registers, in the profile's word order; counts_per_mm converts them to mm.
-// Every field is required except the [alarms] table; a missing, unknown,
+// registers, in the profile's word order (or, with units.position_bits = 16,
+// signed 16-bit counts in one register); counts_per_mm converts them to mm.
+// Every field is required except units.position_bits, the [handshake] table
+// (command conventions, CommandProtocol) and the [alarms] table; a missing, unknown,
 // mistyped or inconsistent field throws ProfileError naming it. [alarms] maps
 // alarm codes to their meanings; a code is written in decimal (177 = "...")
 // or in hex as drive manuals often list them (0xB1 = "..."), once.
@@ -90,12 +92,50 @@ struct Timing {
   int home_timeout_ms = 30000;
 };
 
+// How the drive takes a code written to the command register
+// (docs/drive-profile.md#handshake-optional).
+enum class CommandHandshake {
+  // The register keeps the code written; the driver reads it back and compares.
+  kKept,
+  // The drive clears the register once it took the command; acceptance is seen
+  // in the status instead (see ModbusBench), within accept_timeout_ms.
+  kSelfClearing,
+  // Edge-triggered: the code is set, held until the drive sets ack_bit (or
+  // for pulse_ms when there is no ack_bit), then cleared.
+  kPulse,
+};
+
+// The command conventions of a drive: handshake, servo-on before the first
+// move, alarm reset as a pulse. The defaults describe rig's own map.
+struct CommandProtocol {
+  CommandHandshake handshake = CommandHandshake::kKept;
+  // kSelfClearing, kPulse with ack_bit, and enable: how long the driver waits
+  // for the drive to show it took a command, ms.
+  int accept_timeout_ms = 1000;
+  // kPulse: status bit the drive sets once it took the command; -1: none,
+  // hold the code for pulse_ms instead.
+  int ack_bit = -1;
+  // How long a pulse (kPulse without ack_bit, reset_pulse) is held, ms.
+  int pulse_ms = 50;
+  // Bits written to the command register before the first home or move and
+  // kept set (OR-ed) in every code written afterwards; 0: no servo-on.
+  std::uint16_t servo_on = 0;
+  // Status bit the drive sets when the servo is on; required with servo_on.
+  int servo_ready_bit = -1;
+  // The alarm reset is written, held pulse_ms and cleared (drives that reset
+  // on a rising edge), whatever the handshake.
+  bool reset_pulse = false;
+};
+
 struct DriveProfile {
   std::string name;    // free text, for logs
   std::string source;  // file it was read from (for messages)
   int unit_id = 1;     // Modbus unit (slave) id, 1..247, or 255 for TCP
   WordOrder word_order = WordOrder::kHighFirst;
-  double counts_per_mm = 1000;      // position register units per mm (1000 = µm)
+  double counts_per_mm = 1000;  // position register units per mm (1000 = µm)
+  // Width of a position register value: 32 (two registers, word_order) or 16
+  // (one register, signed).
+  int position_bits = 32;
   double speed_units_per_mm_s = 1;  // speed register units per mm/s
   double default_speed_mm_s = 50;   // written with every move
   double max_speed_mm_s = 100;      // set_speed refuses more
@@ -109,6 +149,14 @@ struct DriveProfile {
   SoftLimits soft_limits;
   Timing timing;
   std::map<int, std::string> alarm_meanings;  // code -> meaning
+  CommandProtocol protocol;
+
+  // Registers one position takes: 2 for 32-bit values, 1 for 16-bit ones.
+  int position_registers() const { return position_bits == 16 ? 1 : 2; }
+  // A position's counts as its registers (position_registers() of them);
+  // precondition: the counts fit in position_bits.
+  void encode_position(std::int32_t counts, std::uint16_t out[2]) const;
+  std::int32_t decode_position(const std::uint16_t in[2]) const;
 
   // mm -> counts, rounded to nearest. Precondition: the result fits in int32
   // (guaranteed for values inside the validated soft limits).

@@ -7,7 +7,14 @@
 //    sent (SoftLimitError); a target inside is quantized to counts towards the
 //    inside, so no position outside the limits is ever written;
 //  - every write is read back and compared (BenchWriteError on a mismatch or
-//    a Modbus exception response);
+//    a Modbus exception response), except a command to a drive that clears
+//    its command register itself: its acceptance is read from the status
+//    instead. Commands follow the profile's [handshake]: kept, self-clearing,
+//    or an edge-triggered pulse (set, acknowledge, clear), with the servo-on
+//    bits written before the first home or move and kept set;
+//  - a link that stays down raises BenchLinkError naming the likely cause
+//    (nothing listening, no route, no serial device, no answer from the
+//    unit, garbled answers) and what to check;
 //  - reconnect watchdog: when the link fails (timeout, reset, EPIPE, garbled
 //    frame) the link is closed and re-opened with exponential backoff
 //    (10 ms doubling to 500 ms) for up to the profile's reconnect_timeout_ms.
@@ -27,6 +34,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "motion/bench.hpp"
 #include "motion/bench_url.hpp"
@@ -71,12 +79,30 @@ class ModbusBench : public Bench {
   // Raises if the re-read state contradicts what was commanded; returns the
   // errno of a failed read (0 if none), after which the reconnect goes on.
   int check_state_after_reconnect(const BenchStatus& s);
+  // The BenchLinkError text for a link that stayed down: what failed, the
+  // last error, and what a person should check for it (link_hint).
+  std::string link_down_message(const char* what, bool first, int err) const;
+  std::string link_hint(int err) const;
   int read_feedback(BenchStatus& out);
   int read_targets(std::array<std::int32_t, 2>& counts);
   // Writes registers (address -> value), grouped into contiguous runs, and
   // reads every run back.
   void write_verified(const char* what, const std::map<int, std::uint16_t>& values);
-  void command(const char* what, std::uint16_t code);
+  // What shows that the drive took a command whose register it clears.
+  enum class Acceptance { kMotion, kHoming, kStill, kAlarmCleared };
+  // Writes a command code with the profile's handshake (kept: read back;
+  // self-clearing: acceptance seen in the status; pulse: set, acknowledge,
+  // clear), the servo-on bits held. `target`: where the command takes the
+  // bench, for kMotion and kHoming. Throws BenchWriteError.
+  void command(const char* what, std::uint16_t code, Acceptance kind,
+               const std::optional<XY>& target);
+  bool accepted(Acceptance kind, const BenchStatus& before, const BenchStatus& s,
+                const std::optional<XY>& target) const;
+  void write_unverified(const char* what, int address, std::uint16_t value);
+  // The profile's servo-on, written and awaited when the status shows the servo off.
+  void ensure_servo_on(const char* what);
+  // The bits kept set in every command: the servo-on once it was written.
+  std::uint16_t held_bits() const;
   BenchStatus decode_feedback(const std::uint16_t* block, int first) const;
 
   DriveProfile profile_;
@@ -91,6 +117,7 @@ class ModbusBench : public Bench {
   std::optional<XY> target_mm_;
   std::array<std::int32_t, 2> target_counts_{};
   bool homed_seen_ = false;
+  bool servo_enabled_ = false;
   int reconnects_ = 0;
 };
 

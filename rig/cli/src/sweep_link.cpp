@@ -3,6 +3,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <string>
 #include <thread>
 
 namespace rig::cli {
@@ -55,10 +56,25 @@ class SweepLink::SignalWatch {
   }, old_term_{};
 };
 
-SweepLink::SweepLink(const telemetry::TelemetryEndpoints& endpoints)
+SweepLink::SweepLink(const telemetry::TelemetryEndpoints& endpoints) try
     : publisher(endpoints.publish),
       server_(endpoints.control, control, [this] { return status(); }),
-      signals_(std::make_unique<SignalWatch>(control)) {}
+      signals_(std::make_unique<SignalWatch>(control)) {
+} catch (const telemetry::EndpointError&) {
+  throw;
+} catch (const telemetry::TelemetryError& e) {
+  // Both messages name their endpoint; the two endpoints differ.
+  const std::string what = e.what();
+  const bool control_failed = what.find("\"" + endpoints.control + "\"") != std::string::npos;
+  const std::string key = control_failed ? "control" : "publish";
+  throw telemetry::TelemetryError(
+      what + " (the sweep file's [telemetry] " + key + " = \"" +
+      (control_failed ? endpoints.control : endpoints.publish) +
+      "\"). Another rig sweep may be running on these ports: `rig ctl status --endpoint " +
+      endpoints.control +
+      "` asks it. Wait for it or stop it, or give this sweep other ports in its [telemetry] "
+      "table");
+}
 
 SweepLink::~SweepLink() = default;
 

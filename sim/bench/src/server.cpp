@@ -14,6 +14,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "motion/errors.hpp"
+
 namespace sim::bench {
 namespace {
 
@@ -36,6 +38,16 @@ BenchServer::BenchServer(motion::DriveProfile profile, BenchSimConfig config,
       options_(std::move(options)),
       dynamics_(config_, profile_.home_x_mm, profile_.home_y_mm),
       faults_(config_.faults) {
+  // The simulated drive keeps its command register and uses 32-bit positions
+  // (docs/register-map.md); other conventions are emulated by the test drives.
+  if (profile_.position_bits != 32 ||
+      profile_.protocol.handshake != motion::CommandHandshake::kKept ||
+      profile_.protocol.servo_on != 0 || profile_.protocol.reset_pulse) {
+    throw motion::ProfileError(profile_.source +
+                               ": the simulated bench serves only 32-bit positions "
+                               "(units.position_bits = 32) and a command register that keeps "
+                               "its code (no [handshake] table)");
+  }
   const motion::RegisterMap& r = profile_.registers;
   const std::initializer_list<std::pair<int, int>> writes = {
       {r.target_x, 2}, {r.target_y, 2}, {r.speed, 1}, {r.command, 1}};
@@ -109,11 +121,18 @@ void BenchServer::start_network() {
     ctx_ = modbus_new_tcp(options_.host.c_str(), port_ != 0 ? port_ : options_.port);
     if (ctx_) listen_fd_ = modbus_tcp_listen(ctx_, options_.max_clients);
     if (!ctx_ || listen_fd_ == -1) {
-      const std::string err = modbus_strerror(errno);
+      const int code = errno;
+      const std::string err = modbus_strerror(code);
       if (ctx_) modbus_free(ctx_);
       ctx_ = nullptr;
-      throw std::runtime_error("sim bench: cannot listen on " + options_.host + ":" +
-                               std::to_string(port_ != 0 ? port_ : options_.port) + ": " + err);
+      const std::string where =
+          options_.host + ":" + std::to_string(port_ != 0 ? port_ : options_.port);
+      throw std::runtime_error(
+          "sim bench: cannot listen on " + where + ": " + err +
+          (code == EADDRINUSE ? ": another rig sim (or rig sim bench) probably serves there; stop "
+                                "it, or give this one another port ([bench] port of the "
+                                "simulated rig file, --port of rig sim bench; 0 picks a free one)"
+                              : std::string()));
     }
     sockaddr_in addr{};
     socklen_t len = sizeof addr;

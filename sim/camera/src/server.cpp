@@ -2,18 +2,22 @@
 
 #include <arpa/inet.h>
 #include <arv.h>
+#include <ifaddrs.h>
 #include <netinet/in.h>
 #include <sys/socket.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <tuple>
+#include <vector>
 
 namespace sim::camera {
 
@@ -144,33 +148,83 @@ CameraServer::~CameraServer() {
   stop();
 }
 
-void CameraServer::start() {
-  if (impl_) return;
+namespace {
+
+// The IPv4 addresses and the names of this machine's network interfaces, for
+// telling an address on no interface from a port another camera holds.
+std::vector<std::string> interface_addresses_and_names() {
+  std::vector<std::string> found;
+  ifaddrs* list = nullptr;
+  if (getifaddrs(&list) != 0) return found;
+  for (const ifaddrs* i = list; i != nullptr; i = i->ifa_next) {
+    if (i->ifa_name != nullptr) found.emplace_back(i->ifa_name);
+    if (i->ifa_addr == nullptr || i->ifa_addr->sa_family != AF_INET) continue;
+    char text[INET_ADDRSTRLEN] = {};
+    const auto* a = reinterpret_cast<const sockaddr_in*>(i->ifa_addr);
+    if (inet_ntop(AF_INET, &a->sin_addr, text, sizeof text)) found.emplace_back(text);
+  }
+  freeifaddrs(list);
+  return found;
+}
+
+std::string ipv4_addresses_of(const std::vector<std::string>& found) {
+  std::string listed;
+  for (const std::string& f : found) {
+    in_addr ignored{};
+    if (inet_pton(AF_INET, f.c_str(), &ignored) == 1) listed += (listed.empty() ? "" : ", ") + f;
+  }
+  return listed;
+}
+
+// Throws when `address` is neither an address nor a name of an interface
+// (Aravis serves GigE Vision only on an interface's own address), or when
+// another camera holds its control port 3956.
+void check_camera_address(const std::string& address) {
+  const std::vector<std::string> found = interface_addresses_and_names();
+  if (std::find(found.begin(), found.end(), address) == found.end()) {
+    throw std::runtime_error(
+        "sim camera: camera.address \"" + address +
+        "\" is not the address (or name) of a network interface of this machine; it has " +
+        ipv4_addresses_of(found) +
+        " (ip -brief addr). Use one of them, or add the address to an interface first: `sudo ip "
+        "addr add " +
+        address + (address.rfind("127.", 0) == 0 ? "/8 dev lo`" : "/24 dev INTERFACE`"));
+  }
   // Aravis binds the control port with address reuse and starts even when it
   // fails; a plain bind first tells that another camera holds the address.
-  in_addr address{};
-  if (inet_pton(AF_INET, options_.interface_address.c_str(), &address) == 1) {
-    const int probe = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
-    sockaddr_in sa{};
-    sa.sin_family = AF_INET;
-    sa.sin_port = htons(3956);  // GVCP, GigE Vision's control port
-    sa.sin_addr = address;
-    const bool taken = probe >= 0 && bind(probe, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0;
-    if (probe >= 0) close(probe);
-    if (taken)
-      throw std::runtime_error("sim camera: GigE Vision control port " +
-                               options_.interface_address +
-                               ":3956 is taken (another camera is serving there)");
+  in_addr ip{};
+  if (inet_pton(AF_INET, address.c_str(), &ip) != 1) return;
+  const int probe = socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC, 0);
+  sockaddr_in sa{};
+  sa.sin_family = AF_INET;
+  sa.sin_port = htons(3956);  // GVCP, GigE Vision's control port
+  sa.sin_addr = ip;
+  const bool taken = probe >= 0 && bind(probe, reinterpret_cast<sockaddr*>(&sa), sizeof sa) != 0 &&
+                     errno == EADDRINUSE;
+  if (probe >= 0) close(probe);
+  if (taken) {
+    throw std::runtime_error(
+        "sim camera: GigE Vision control port " + address +
+        ":3956 is taken: another camera serves there, most likely another `rig sim` (stop it, "
+        "or find it with `ss -ulpn 'sport = :3956'`), or give this one another camera.address, "
+        "e.g. 127.0.0.2 after `sudo ip addr add 127.0.0.2/8 dev lo`");
   }
+}
+
+}  // namespace
+
+void CameraServer::start() {
+  if (impl_) return;
+  check_camera_address(options_.interface_address);
   auto impl = std::make_unique<Impl>();
   impl->server = this;
   impl->gv_camera = arv_gv_fake_camera_new_full(options_.interface_address.c_str(),
                                                 options_.serial.c_str(), nullptr);
   if (impl->gv_camera == nullptr || !arv_gv_fake_camera_is_running(impl->gv_camera)) {
     if (impl->gv_camera != nullptr) g_object_unref(impl->gv_camera);
-    throw std::runtime_error(
-        "sim camera: cannot serve GigE Vision on '" + options_.interface_address +
-        "' (no such interface, or another camera already bound its port 3956)");
+    throw std::runtime_error("sim camera: Aravis cannot serve GigE Vision on '" +
+                             options_.interface_address +
+                             "' (its port 3956 was free and the address is an interface's)");
   }
   ArvFakeCamera* camera = arv_gv_fake_camera_get_fake_camera(impl->gv_camera);
   const vision::Camera& model = renderer_->camera();

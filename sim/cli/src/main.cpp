@@ -4,6 +4,7 @@
 // rendered from the bench's actual position (sim/camera/server.hpp).
 #include <CLI/CLI.hpp>
 #include <csignal>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -98,6 +99,20 @@ std::optional<int> start_or_exit_code(Start&& start) {
   }
 }
 
+// The default file names are relative to the repository's top folder: said
+// plainly when the file is not there (rig sim run from another folder).
+// Returns kExitBadInput after printing, or nullopt when the file exists.
+std::optional<int> missing_config(const std::string& path, const std::string& what) {
+  std::error_code ec;
+  if (std::filesystem::is_regular_file(path, ec)) return std::nullopt;
+  std::cerr << "rig sim: " << what << " " << path << " not found (looked for "
+            << std::filesystem::absolute(path, ec).string()
+            << "). Run rig sim from the repository's top folder, or name the file with --config "
+               "FILE"
+            << std::endl;
+  return kExitBadInput;
+}
+
 // Serves until SIGINT or SIGTERM, then stops the camera (if any) and the bench.
 int serve_until_signalled(StopSignals& signals, SimRig& rig) {
   const int sig = signals.wait();
@@ -108,6 +123,7 @@ int serve_until_signalled(StopSignals& signals, SimRig& rig) {
 }
 
 int run_until_stopped(const SimBenchOptions& bench_options) {
+  if (auto code = missing_config(bench_options.config, "the bench file")) return *code;
   StopSignals signals;  // before any server thread exists
   SimRig rig;
   if (auto code = start_or_exit_code([&] { rig.bench = start_bench(bench_options); })) return *code;
@@ -131,6 +147,7 @@ void write_truth(const sim::camera::SimRigConfig& config, const std::string& pat
 
 // rig sim --config FILE: the bench and the camera that sees from it.
 int run_rig_until_stopped(const SimRigOptions& options) {
+  if (auto code = missing_config(options.config, "the simulated rig file")) return *code;
   StopSignals signals;  // before any server thread exists
   SimRig rig;
   const auto code = start_or_exit_code([&] {
