@@ -199,7 +199,11 @@ void ModbusBench::write_verified(const char* what, const std::map<int, std::uint
       runs.push_back({addr, {value}});
     }
   }
-  for (const auto& [addr, regs] : runs) {
+  for (const auto& run : runs) {
+    // Named, not structured bindings: C++17 lambdas cannot capture those
+    // (clang refuses; the fuzz build uses clang).
+    const auto addr = run.first;
+    const auto& regs = run.second;
     const int n = static_cast<int>(regs.size());
     std::vector<std::uint16_t> back(regs.size());
     const int err = transact(what, [&] {

@@ -177,7 +177,7 @@ class PositionMeasurer {
   // settled status and the settle time.
   std::pair<motion::BenchStatus, double> move_and_settle(std::int64_t index, const PlanPosition& p,
                                                          db::store::PositionRecord& rec) {
-    int link_failures = 0;
+    int link_failures = 0, rehomed = 0;
     for (;;) {
       try {
         const auto move_start = Clock::now();
@@ -190,10 +190,15 @@ class PositionMeasurer {
         rec.stage_times.push_back({"settle", settle_s});
         return {status, move_s + settle_s};
       } catch (const motion::BenchFault& e) {
-        faults_.on_alarm(e, index);
+        // At most one homing per link failure: a drive that raises "not
+        // homed" right after being homed is an alarm like any other.
+        if (rehomed > link_failures || !home_again_if_lost(index))
+          faults_.on_alarm(e, index);
+        else
+          ++rehomed;
       } catch (const motion::BenchLinkError& e) {
         faults_.on_link_lost(e, index, ++link_failures);
-        home_again_if_lost(index);
+        if (home_again_if_lost(index)) ++rehomed;
       } catch (const motion::BenchTimeout& e) {
         throw PositionFailure{"settle", e.what()};
       } catch (const motion::SoftLimitError& e) {
@@ -203,14 +208,17 @@ class PositionMeasurer {
     }
   }
 
-  // After the link came back: a drive that restarted has lost its homing, and
-  // a move would only raise "not homed". With home_first it is homed again
-  // (its alarm reset first) before the move is retried; without, the run
-  // fails saying so. A link still down is left to the retry.
-  void home_again_if_lost(std::int64_t index) {
+  // A drive that restarted (seen as a link drop, or as "not homed" on the
+  // next move when the drop happened between two bench commands) has lost
+  // its homing, and a move would only raise "not homed" again. With
+  // home_first it is homed again (its alarm reset first) and the move is
+  // retried: returns true. Returns false when the bench is homed (nothing to
+  // do) or the link is still down (the retry meets it and counts it).
+  // Without home_first the run fails saying so.
+  bool home_again_if_lost(std::int64_t index) {
     try {
       const motion::BenchStatus status = bench_.status();
-      if (status.homed) return;
+      if (status.homed) return false;
       if (!config_.home_first)
         throw RunEnd{db::store::RunStatus::kFailed,
                      "the bench lost its homing (the drive restarted) and home_first = false: "
@@ -219,10 +227,12 @@ class PositionMeasurer {
       if (status.alarm) bench_.reset_alarm();
       bench_.home();
       bench_.wait_settled(std::chrono::milliseconds(config_.bench_profile.timing.home_timeout_ms));
+      return true;
     } catch (const motion::BenchLinkError&) {
-      // Still down: the retry meets it and counts it.
+      return false;
     } catch (const motion::BenchFault& e) {
       faults_.on_alarm(e, index);  // pauses or aborts per [faults] on_alarm
+      return false;
     } catch (const motion::BenchTimeout& e) {
       throw RunEnd{db::store::RunStatus::kFailed,
                    std::string("homing again after the drive restarted: ") + e.what()};

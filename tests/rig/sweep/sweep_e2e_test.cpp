@@ -346,7 +346,9 @@ TEST(SweepEndToEnd, ThePrintedResumeCommandWorksOnABenchThatLatchedNotHomed) {
     ASSERT_TRUE(bench.status().alarm);
   }
   // "  resume:    rig sweep FILE --db DB --resume 1", run as printed.
-  const std::string command = resume_line.substr(resume_line.find("rig sweep") + 4);
+  const std::string printed = "rig sweep ";
+  ASSERT_NE(resume_line.find(printed), std::string::npos) << resume_line;
+  const std::string command = resume_line.substr(resume_line.find(printed) + printed.size());
   std::istringstream words(command);
   std::vector<std::string> args;
   for (std::string w; words >> w;)
