@@ -228,6 +228,12 @@ Camera Camera::load(const std::string& path) {
   if (!fs.isOpened())
     throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration");
   const cv::FileNode root = fs.root();
+  // FileNode::operator[] asserts a map: a file whose top level is a list or
+  // a scalar is refused here, not by an OpenCV assertion.
+  if (!root.isMap())
+    throw CalibrationError("calibration file '" + path +
+                           "': the top level is not a map of keys; expected image_width, "
+                           "image_height, camera_matrix and distortion_coefficients");
 
   const int width = read_int(root, path, "image_width");
   const int height = read_int(root, path, "image_height");

@@ -132,6 +132,17 @@ TEST_F(HostileInput, DetectRefusesDeepXmlAndBlockYamlCalibrations) {
       << y.err.substr(0, 300);
 }
 
+// Found by fuzzing (tests/fuzz/calibration.cpp): a calibration whose top
+// level is a list made OpenCV assert inside FileNode::operator[].
+TEST_F(HostileInput, DetectRefusesACalibrationWhoseTopLevelIsNotAMap) {
+  const std::string calibration = write("list.yaml", "%YAML:1.0\n---\n- 1\n- 2\n");
+  const RigRun r = run_rig("detect none.png --camera " + calibration);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err, "rig detect: calibration file '" + calibration +
+                       "': the top level is not a map of keys; expected image_width, "
+                       "image_height, camera_matrix and distortion_coefficients\n");
+}
+
 TEST_F(HostileInput, DetectOfAFolderSaysItIsAFolder) {
   const RigRun r = run_rig("detect " + dir_.string());
   EXPECT_EQ(r.exit_code, 2);
