@@ -254,7 +254,11 @@ void ModbusBench::write_verified(const char* what, const std::map<int, std::uint
       runs.push_back({addr, {value}});
     }
   }
-  for (const auto& [addr, regs] : runs) {
+  for (const auto& run : runs) {
+    // Named, not structured bindings: C++17 lambdas cannot capture those
+    // (clang refuses; the fuzz build uses clang).
+    const auto addr = run.first;
+    const auto& regs = run.second;
     const int n = static_cast<int>(regs.size());
     std::vector<std::uint16_t> back(regs.size());
     const int err = transact(what, [&] {
@@ -400,6 +404,14 @@ void ModbusBench::set_speed(double speed_mm_s) {
     throw SoftLimitError("speed " + fmt_mm(speed_mm_s) + " mm/s is outside (0, " +
                          fmt_mm(profile_.max_speed_mm_s) + "] (motion.max_speed_mm_s of " +
                          profile_.source + ")");
+  }
+  // The drive takes the speed as an integer in its own units; one that
+  // rounds to 0 is refused by the drive (or means "stand still").
+  if (std::lround(speed_mm_s * profile_.speed_units_per_mm_s) < 1) {
+    throw SoftLimitError(
+        "speed " + fmt_mm(speed_mm_s) + " mm/s rounds to 0 in the drive's units (" +
+        fmt_mm(profile_.speed_units_per_mm_s) + " per mm/s, " + profile_.source +
+        "); expected at least " + fmt_mm(0.5 / profile_.speed_units_per_mm_s) + " mm/s");
   }
   speed_mm_s_ = speed_mm_s;
 }

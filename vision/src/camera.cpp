@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <opencv2/core/persistence.hpp>
 #include <sstream>
@@ -88,6 +89,81 @@ std::vector<double> read_matrix(const cv::FileNode& root, const std::string& pat
   return values;
 }
 
+// The bounds of a calibration file: OpenCV's FileStorage parsers recurse
+// once per nesting level and would exhaust the stack on a file nested
+// thousands of levels deep; a calibration nests 3 levels and is a few KiB.
+constexpr std::size_t kMaxCalibrationBytes = 1u << 20;
+constexpr int kMaxCalibrationDepth = 32;
+constexpr std::size_t kMaxIndentColumns = 256;
+
+[[noreturn]] void too_deep(const std::string& path, int line, const std::string& what) {
+  throw CalibrationError("calibration file '" + path + "': line " + std::to_string(line) + ": " +
+                         what + "; expected a calibration nesting at most " +
+                         std::to_string(kMaxCalibrationDepth) + " levels deep");
+}
+
+// YAML: flow collections ([ {) nest by brackets, block collections by the
+// indentation and the "- " of each line; both are bounded. Brackets inside
+// quoted scalars and comments do not count.
+void check_yaml_nesting(const std::string& path, const std::string& text) {
+  int depth = 0, line = 1;
+  std::size_t column = 0;
+  bool line_start = true, comment = false;
+  char quote = 0;
+  for (const char c : text) {
+    if (c == '\n') {
+      ++line;
+      column = 0;
+      line_start = true;
+      comment = false;
+      continue;
+    }
+    if (line_start && (c == ' ' || c == '-' || c == '\t')) {
+      if (++column > kMaxIndentColumns)
+        too_deep(path, line,
+                 "indented more than " + std::to_string(kMaxIndentColumns) + " columns");
+      continue;
+    }
+    line_start = false;
+    if (comment) continue;
+    if (quote) {
+      if (c == quote) quote = 0;
+    } else if (c == '"' || c == '\'') {
+      quote = c;
+    } else if (c == '#') {
+      comment = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxCalibrationDepth)
+        too_deep(path, line,
+                 "flow collections nested more than " + std::to_string(kMaxCalibrationDepth) +
+                     " levels deep");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+}
+
+// XML: elements nest by start tags; <?...?>, <!...> and empty-element tags
+// do not open a level.
+void check_xml_nesting(const std::string& path, const std::string& text) {
+  int depth = 0, line = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\n') ++line;
+    if (text[i] != '<' || i + 1 >= text.size()) continue;
+    const char next = text[i + 1];
+    if (next == '/') {
+      if (depth > 0) --depth;
+    } else if (next != '?' && next != '!') {
+      const auto close = text.find('>', i);
+      const bool empty_element = close != std::string::npos && close > 0 && text[close - 1] == '/';
+      if (!empty_element && ++depth > kMaxCalibrationDepth)
+        too_deep(
+            path, line,
+            "elements nested more than " + std::to_string(kMaxCalibrationDepth) + " levels deep");
+    }
+  }
+}
+
 }  // namespace
 
 Camera::Camera(const Intrinsics& intrinsics, const Distortion& distortion, int width_px,
@@ -110,17 +186,30 @@ Camera Camera::paper_default() {
 }
 
 Camera Camera::load(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw CalibrationError("calibration file '" + path +
+                           "': is not a regular file; expected a YAML/XML calibration file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw CalibrationError("calibration file '" + path + "': cannot be opened");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  std::string text = buffer.str();
+  std::string text(kMaxCalibrationBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxCalibrationBytes)
+    throw CalibrationError("calibration file '" + path + "': is larger than " +
+                           std::to_string(kMaxCalibrationBytes >> 20) +
+                           " MiB; expected a YAML/XML calibration of a few KiB");
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
     throw CalibrationError("calibration file '" + path + "': is empty");
 
   // OpenCV's YAML reader insists on its "%YAML:1.0" header; ROS camera_info
   // files are plain YAML, so give them one.
   const bool xml = text.compare(0, 5, "<?xml") == 0 || lower_extension(path) == "xml";
+  if (xml)
+    check_xml_nesting(path, text);
+  else
+    check_yaml_nesting(path, text);
   int flags = cv::FileStorage::READ | cv::FileStorage::MEMORY;
   if (xml) {
     flags |= cv::FileStorage::FORMAT_XML;
@@ -128,6 +217,7 @@ Camera Camera::load(const std::string& path) {
     flags |= cv::FileStorage::FORMAT_YAML;
     if (text.compare(0, 5, "%YAML") != 0) text = "%YAML:1.0\n---\n" + text;
   }
+
   cv::FileStorage fs;
   try {
     fs.open(text, flags);
@@ -138,6 +228,12 @@ Camera Camera::load(const std::string& path) {
   if (!fs.isOpened())
     throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration");
   const cv::FileNode root = fs.root();
+  // FileNode::operator[] asserts a map: a file whose top level is a list or
+  // a scalar is refused here, not by an OpenCV assertion.
+  if (!root.isMap())
+    throw CalibrationError("calibration file '" + path +
+                           "': the top level is not a map of keys; expected image_width, "
+                           "image_height, camera_matrix and distortion_coefficients");
 
   const int width = read_int(root, path, "image_width");
   const int height = read_int(root, path, "image_height");

@@ -1,6 +1,7 @@
 #include "vision/detector_image.hpp"
 
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
@@ -37,6 +38,13 @@ bool has_end_marker(const std::vector<uchar>& b, std::string* format) {
 }  // namespace
 
 cv::Mat read_image(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw ImageError(
+        "image '" + path + "': is " +
+        (std::filesystem::is_directory(status) ? "a directory" : "not a regular file") +
+        "; expected an image file (PNG, JPEG, TIFF, PGM/PPM or BMP)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw ImageError("image '" + path + "': cannot be opened (missing or unreadable)");
   const std::vector<uchar> bytes((std::istreambuf_iterator<char>(in)),

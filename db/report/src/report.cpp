@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "db/stats/error.hpp"
 #include "report_data.hpp"
 #include "report_document.hpp"
 #include "report_study.hpp"
@@ -37,8 +38,19 @@ RunReference RunReference::parse(const std::string& text) {
   return ref;
 }
 
+// A statistic that cannot be computed from a run's stored values (a value
+// so large that its square overflows, one that is not finite) means the
+// database holds values no rig measured: bad input naming the database.
 RunStudy study_run(const std::string& database, const ReportOptions& options) {
-  return report::compute_study(report::load_run(database, options.run_id), options);
+  const RunData data = report::load_run(database, options.run_id);
+  try {
+    return report::compute_study(data, options);
+  } catch (const stats::StatsError& e) {
+    throw ReportInputError(database + ": run " + std::to_string(data.run.id) +
+                           ": cannot be reported: " + e.what() +
+                           " (a stored value, e.g. a distance, is beyond any physical range); "
+                           "expected a database written by rig sweep");
+  }
 }
 
 Report::Report(const std::string& database, const ReportOptions& options,

@@ -59,7 +59,8 @@ class ModbusBench : public Bench {
   void reset_alarm() override;
 
   // Speed written with every following move, mm/s. Throws SoftLimitError if
-  // not in (0, profile.max_speed_mm_s].
+  // not in (0, profile.max_speed_mm_s] (NaN included) or if it rounds to 0 in
+  // the drive's units (profile.speed_units_per_mm_s).
   void set_speed(double speed_mm_s);
 
   const DriveProfile& profile() const { return profile_; }

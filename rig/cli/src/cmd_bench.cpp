@@ -4,6 +4,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "commands.hpp"
@@ -17,7 +18,7 @@ namespace {
 struct BenchArgs {
   std::string url;
   std::string profile;
-  double speed_mm_s = 0;  // 0: the profile's default
+  std::optional<double> speed_mm_s;  // none: the profile's default
   double x_mm = 0, y_mm = 0;
 };
 
@@ -38,7 +39,7 @@ int with_bench(const BenchArgs& a, Action action) {
   return run_command("bench", [&] {
     motion::ModbusBench bench(motion::BenchUrl::parse(a.url),
                               motion::load_drive_profile(a.profile));
-    if (a.speed_mm_s > 0) bench.set_speed(a.speed_mm_s);
+    if (a.speed_mm_s) bench.set_speed(*a.speed_mm_s);  // refuses 0, negative, NaN (exit 2)
     action(bench);
     print(bench.status());
     return kExitOk;

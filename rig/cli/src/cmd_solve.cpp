@@ -12,124 +12,38 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "config/json.hpp"
 #include "estimate_json.hpp"
+#include "solve_problem.hpp"
 #include "vision/solvers.hpp"
 
 namespace rig::cli {
 namespace {
 
-// Bad input to `rig solve`; the message names the key and what was expected
-// (run_solve adds the problem's name).
-struct ProblemError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-struct Problem {
-  std::optional<vision::Camera> camera;
-  std::vector<Eigen::Vector3d> object_points;
-  std::vector<Eigen::Vector2d> image_points_px;
-};
-
-double finite_number(const nlohmann::json& j, const std::string& where) {
-  if (!j.is_number()) throw ProblemError(where + " must be a number, got " + j.dump());
-  const double v = j.get<double>();
-  if (!std::isfinite(v)) throw ProblemError(where + " must be finite, got " + j.dump());
-  return v;
-}
-
-template <int N>
-std::vector<Eigen::Matrix<double, N, 1>> read_points(const nlohmann::json& root,
-                                                     const std::string& key) {
-  if (!root.contains(key)) throw ProblemError("key '" + key + "' is missing");
-  const auto& arr = root[key];
-  if (!arr.is_array())
-    throw ProblemError("'" + key + "' must be an array of [" + (N == 3 ? "x, y, z" : "u, v") + "]");
-  std::vector<Eigen::Matrix<double, N, 1>> out;
-  for (size_t i = 0; i < arr.size(); ++i) {
-    const std::string where = key + "[" + std::to_string(i) + "]";
-    if (!arr[i].is_array() || arr[i].size() != N)
-      throw ProblemError(where + " must be an array of " + std::to_string(N) + " numbers, got " +
-                         arr[i].dump());
-    Eigen::Matrix<double, N, 1> p;
-    for (int k = 0; k < N; ++k)
-      p(k) = finite_number(arr[i][k], where + "[" + std::to_string(k) + "]");
-    out.push_back(p);
-  }
-  return out;
-}
-
-vision::Camera read_camera(const nlohmann::json& j) {
-  if (!j.is_object())
-    throw ProblemError("'camera' must be an object {fx, fy, cx, cy, dist, width, height}");
-  auto need = [&](const char* k) -> const nlohmann::json& {
-    if (!j.contains(k)) throw ProblemError(std::string("key 'camera.") + k + "' is missing");
-    return j[k];
-  };
-  const vision::Intrinsics in{
-      finite_number(need("fx"), "camera.fx"), finite_number(need("fy"), "camera.fy"),
-      finite_number(need("cx"), "camera.cx"), finite_number(need("cy"), "camera.cy")};
-  vision::Distortion d;
-  if (j.contains("dist")) {
-    const auto& dist = j["dist"];
-    if (!dist.is_array() || dist.size() < 4 || dist.size() > 5)
-      throw ProblemError("'camera.dist' must be [k1, k2, p1, p2] or [k1, k2, p1, p2, k3], got " +
-                         dist.dump());
-    double* fields[] = {&d.k1, &d.k2, &d.p1, &d.p2, &d.k3};
-    for (size_t k = 0; k < dist.size(); ++k)
-      *fields[k] = finite_number(dist[k], "camera.dist[" + std::to_string(k) + "]");
-  }
-  const auto size = [&](const char* k) {
-    const auto& v = need(k);
-    if (!v.is_number_integer() || v.get<long long>() <= 0)
-      throw ProblemError(std::string("'camera.") + k + "' must be a positive integer, got " +
-                         v.dump());
-    return static_cast<int>(v.get<long long>());
-  };
-  try {
-    return vision::Camera(in, d, size("width"), size("height"));
-  } catch (const std::invalid_argument& e) {
-    throw ProblemError(e.what());
-  }
+// The first `max_bytes` bytes of `in` (all of it when shorter).
+std::string read_at_most(std::istream& in, std::size_t max_bytes) {
+  std::string text(max_bytes, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(max_bytes));
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  return text;
 }
 
 Problem read_problem(const std::string& source) {
   std::string text;
   std::filesystem::path base = ".";
+  const config::JsonLimits limits;
   if (source == "-") {
-    text.assign(std::istreambuf_iterator<char>(std::cin), {});
+    text = read_at_most(std::cin, limits.max_bytes + 1);
   } else {
+    std::error_code ec;
+    if (std::filesystem::is_directory(source, ec))
+      throw ProblemError("is a directory; expected a JSON problem file");
     std::ifstream in(source);
     if (!in) throw ProblemError("cannot be opened");
-    text.assign(std::istreambuf_iterator<char>(in), {});
+    text = read_at_most(in, limits.max_bytes + 1);
     base = std::filesystem::path(source).parent_path();
   }
-  nlohmann::json root;
-  try {
-    root = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw ProblemError(std::string("is not valid JSON: ") + e.what());
-  }
-  if (!root.is_object()) throw ProblemError("must be a JSON object");
-  Problem p;
-  if (root.contains("camera") && root.contains("camera_file"))
-    throw ProblemError("give either 'camera' or 'camera_file', not both");
-  if (root.contains("camera")) {
-    p.camera = read_camera(root["camera"]);
-  } else if (root.contains("camera_file")) {
-    if (!root["camera_file"].is_string()) throw ProblemError("'camera_file' must be a path string");
-    std::filesystem::path path = root["camera_file"].get<std::string>();
-    if (path.is_relative()) path = base / path;  // relative to the problem file
-    try {
-      p.camera = vision::Camera::load(path.string());
-    } catch (const vision::CalibrationError& e) {
-      throw ProblemError(e.what());
-    }
-  } else {
-    throw ProblemError("key 'camera' (or 'camera_file') is missing");
-  }
-  p.object_points = read_points<3>(root, "object_points");
-  p.image_points_px = read_points<2>(root, "image_points");
-  return p;
+  return parse_problem(text, base);
 }
 
 void print_table(const std::vector<vision::Estimate>& estimates) {

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "config/error.hpp"
+#include "config/json.hpp"
 #include "db/report/report.hpp"
 #include "db/store/store.hpp"
 #include "motion/errors.hpp"
@@ -42,6 +43,7 @@ const ErrorKind kErrorKinds[] = {
     {is<sweep::PlanError>, kExitBadInput, ""},
     {is<sweep::RunMismatch>, kExitBadInput, ""},
     {is<config::ConfigError>, kExitBadInput, ""},  // every config file: sweep, profile, target, rig
+    {is<config::JsonInputError>, kExitBadInput, ""},  // JSON too big, too deep or malformed
     {is<vision::CalibrationError>, kExitBadInput, ""},
     {is<vision::TargetError>, kExitBadInput, ""},
     {is<vision::ImageError>, kExitBadInput, ""},

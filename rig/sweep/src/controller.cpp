@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
@@ -14,6 +13,7 @@
 
 #include "db/store/sha256.hpp"
 #include "motion/errors.hpp"
+#include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "run_log.hpp"
 #include "vision/timing.hpp"
@@ -125,16 +125,29 @@ class FaultHandler {
 class PositionMeasurer {
  public:
   PositionMeasurer(const SweepConfig& config, const SweepPlan& plan, motion::Bench& bench,
-                   vision::FrameSource& camera, RunLog& log, FaultHandler& faults)
+                   vision::FrameSource& camera, RunLog& log, FaultHandler& faults,
+                   std::optional<std::filesystem::path> frames_folder)
       : config_(config),
         plan_(plan),
         bench_(bench),
         camera_(camera),
         log_(log),
         faults_(faults),
-        measurer_(config.camera, config.target) {}
+        measurer_(config.camera, config.target),
+        frames_folder_(std::move(frames_folder)) {}
 
   std::vector<std::string> solver_names() const { return measurer_.solver_names(); }
+
+  // Before the first move: the folder the frames go to exists and takes new
+  // files, or the run ends failed here.
+  void prepare() const {
+    if (!frames_folder_) return;
+    try {
+      prepare_frames_folder(*frames_folder_);
+    } catch (const std::runtime_error& e) {
+      throw RunEnd{db::store::RunStatus::kFailed, std::string("capture.save_frames: ") + e.what()};
+    }
+  }
 
   // The record of position `index`: ok, or failed with its reason (the fault
   // recorded). Throws RunEnd when the run cannot go on.
@@ -164,7 +177,7 @@ class PositionMeasurer {
   // settled status and the settle time.
   std::pair<motion::BenchStatus, double> move_and_settle(std::int64_t index, const PlanPosition& p,
                                                          db::store::PositionRecord& rec) {
-    int link_failures = 0;
+    int link_failures = 0, rehomed = 0;
     for (;;) {
       try {
         const auto move_start = Clock::now();
@@ -177,15 +190,52 @@ class PositionMeasurer {
         rec.stage_times.push_back({"settle", settle_s});
         return {status, move_s + settle_s};
       } catch (const motion::BenchFault& e) {
-        faults_.on_alarm(e, index);
+        // At most one homing per link failure: a drive that raises "not
+        // homed" right after being homed is an alarm like any other.
+        if (rehomed > link_failures || !home_again_if_lost(index))
+          faults_.on_alarm(e, index);
+        else
+          ++rehomed;
       } catch (const motion::BenchLinkError& e) {
         faults_.on_link_lost(e, index, ++link_failures);
+        if (home_again_if_lost(index)) ++rehomed;
       } catch (const motion::BenchTimeout& e) {
         throw PositionFailure{"settle", e.what()};
       } catch (const motion::SoftLimitError& e) {
         // load_sweep_config checked every position against the same limits.
         throw RunEnd{db::store::RunStatus::kFailed, e.what()};
       }
+    }
+  }
+
+  // A drive that restarted (seen as a link drop, or as "not homed" on the
+  // next move when the drop happened between two bench commands) has lost
+  // its homing, and a move would only raise "not homed" again. With
+  // home_first it is homed again (its alarm reset first) and the move is
+  // retried: returns true. Returns false when the bench is homed (nothing to
+  // do) or the link is still down (the retry meets it and counts it).
+  // Without home_first the run fails saying so.
+  bool home_again_if_lost(std::int64_t index) {
+    try {
+      const motion::BenchStatus status = bench_.status();
+      if (status.homed) return false;
+      if (!config_.home_first)
+        throw RunEnd{db::store::RunStatus::kFailed,
+                     "the bench lost its homing (the drive restarted) and home_first = false: "
+                     "home it, then resume the run"};
+      log_.event("home", "the bench lost its homing (the drive restarted): homing again", index);
+      if (status.alarm) bench_.reset_alarm();
+      bench_.home();
+      bench_.wait_settled(std::chrono::milliseconds(config_.bench_profile.timing.home_timeout_ms));
+      return true;
+    } catch (const motion::BenchLinkError&) {
+      return false;
+    } catch (const motion::BenchFault& e) {
+      faults_.on_alarm(e, index);  // pauses or aborts per [faults] on_alarm
+      return false;
+    } catch (const motion::BenchTimeout& e) {
+      throw RunEnd{db::store::RunStatus::kFailed,
+                   std::string("homing again after the drive restarted: ") + e.what()};
     }
   }
 
@@ -304,22 +354,22 @@ class PositionMeasurer {
   }
 
   std::string save_frame(std::int64_t index, int k, const cv::Mat& image, std::string& sha) {
-    namespace fs = std::filesystem;
-    const fs::path dir = fs::path(*config_.frames_dir) / ("run" + std::to_string(log_.run_id()));
-    fs::create_directories(dir);
-    const fs::path file = dir / ("p" + std::to_string(index) + "_f" + std::to_string(k) + ".png");
+    const std::filesystem::path file =
+        *frames_folder_ / ("p" + std::to_string(index) + "_f" + std::to_string(k) + ".png");
     std::vector<unsigned char> png;
     if (!cv::imencode(".png", image, png))
       throw RunEnd{db::store::RunStatus::kFailed,
                    "cannot encode frame as PNG for " + file.string()};
-    std::ofstream out(file, std::ios::binary | std::ios::trunc);
-    out.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
-    out.close();
-    if (!out)
-      throw RunEnd{db::store::RunStatus::kFailed, "cannot write frame " + file.string() +
-                                                      " (frames_dir " + *config_.frames_dir + ")"};
-    sha = db::store::sha256_hex(
-        std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+    const std::string_view bytes(reinterpret_cast<const char*>(png.data()), png.size());
+    try {
+      // The folder is this run's alone: a file at the path can only be left
+      // by this run's interrupted position, and is replaced.
+      write_new_file(file, bytes, /*replace_leftover=*/true);
+    } catch (const std::runtime_error& e) {
+      throw RunEnd{db::store::RunStatus::kFailed,
+                   std::string(e.what()) + " (capture.save_frames " + *config_.frames_dir + ")"};
+    }
+    sha = db::store::sha256_hex(bytes);
     return file.string();
   }
 
@@ -330,6 +380,7 @@ class PositionMeasurer {
   RunLog& log_;
   FaultHandler& faults_;
   const vision::FrameMeasurer measurer_;
+  const std::optional<std::filesystem::path> frames_folder_;  // set when frames are saved
 };
 
 }  // namespace
@@ -357,13 +408,20 @@ struct Controller::Impl {
         control(ctl),
         log(s, run, static_cast<std::int64_t>(p.size()), t),
         faults(c.faults, b, ctl, log),
-        positions(c, p, b, cam, log, faults) {}
+        positions(c, p, b, cam, log, faults,
+                  c.frames_dir ? std::optional(run_frames_folder(*c.frames_dir, s.path(), run))
+                               : std::nullopt) {}
 
   RunOutcome run() {
     RunOutcome outcome;
     const std::vector<bool> stored_already = start();
     int consecutive_failed = 0;
     std::optional<RunEnd> end;
+    try {
+      positions.prepare();
+    } catch (const RunEnd& e) {
+      end = e;
+    }
     try {
       for (std::size_t i = 0; i < plan.size() && !end; ++i) {
         if (stored_already[i]) continue;

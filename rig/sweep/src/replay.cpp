@@ -11,6 +11,7 @@
 #include <sstream>
 #include <utility>
 
+#include "config/json.hpp"
 #include "db/store/sha256.hpp"
 #include "motion/errors.hpp"
 #include "rig/sweep/run_record.hpp"
@@ -65,8 +66,7 @@ RecordedRun RecordedRun::load(const db::store::Store& store, std::int64_t run_id
   RecordedRun r;
   r.database_ = store.path();
   r.run_ = store.run(run_id);
-  const nlohmann::json plan = nlohmann::json::parse(r.run_.description.plan_json, nullptr,
-                                                    /*allow_exceptions=*/false);
+  const nlohmann::json plan = parse_stored_json(r.run_.description.plan_json);
   if (plan.is_discarded())
     throw PlanError("run " + std::to_string(run_id) +
                     ": its stored plan is not valid JSON; the database is damaged");
@@ -108,8 +108,7 @@ int RecordedRun::saved_frames_per_position() const {
 }
 
 nlohmann::json RecordedRun::replay_of() const {
-  const nlohmann::json config =
-      nlohmann::json::parse(run_.description.config_json, nullptr, /*allow_exceptions=*/false);
+  const nlohmann::json config = parse_stored_json(run_.description.config_json);
   if (config.is_object() && config.contains("replay_of")) return config["replay_of"];
   return nullptr;
 }
@@ -240,7 +239,7 @@ SweepConfig replay_config(const SweepConfig& config, const RecordedRun& recorded
     const nlohmann::json original = recorded.replay_of();
     if (!original.is_null())
       throw RunMismatch(recorded.describe() + " saved no frames: it is a replay of run " +
-                        original.value("run", nlohmann::json()).dump() + " of " +
+                        config::excerpt_json(original.value("run", nlohmann::json())) + " of " +
                         original.value("database", std::string("?")) +
                         " (a replay names the original PNGs as frame sources); replay that run");
     throw RunMismatch(recorded.describe() +

@@ -10,6 +10,7 @@
 #include <opencv2/core/version.hpp>
 #include <sstream>
 
+#include "config/json.hpp"
 #include "db/store/sha256.hpp"
 
 namespace rig::sweep {
@@ -72,12 +73,19 @@ db::store::RunDescription describe_run(const SweepConfig& config, const SweepPla
   return d;
 }
 
+nlohmann::json parse_stored_json(const std::string& text) {
+  try {
+    return config::parse_json(text, "stored JSON");
+  } catch (const config::JsonInputError&) {
+    return nlohmann::json(nlohmann::json::value_t::discarded);
+  }
+}
+
 SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config) {
   const std::string which = "run " + std::to_string(run.id);
   if (run.status == db::store::RunStatus::kCompleted)
     throw RunMismatch(which + " is completed; there is nothing to resume");
-  const nlohmann::json plan_json =
-      nlohmann::json::parse(run.description.plan_json, nullptr, /*allow_exceptions=*/false);
+  const nlohmann::json plan_json = parse_stored_json(run.description.plan_json);
   if (plan_json.is_discarded())
     throw PlanError(which + ": its stored plan is not valid JSON; the database is damaged");
   SweepPlan plan = SweepPlan::from_json(plan_json);

@@ -3,6 +3,8 @@
 #include <chrono>
 #include <filesystem>
 
+#include "config/json.hpp"
+#include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/run_record.hpp"
 
 namespace rig::sweep {
@@ -15,11 +17,27 @@ db::store::Store open_store(const std::string& path, const SweepConfig& config) 
   return db::store::Store(path, options);
 }
 
+// Before the bench moves: the folder of the database's saved frames exists
+// and takes new files. Bad input (the sweep file's save_frames) otherwise.
+void check_frames_folder(const SweepConfig& config, const db::store::Store& store) {
+  if (!config.frames_dir) return;
+  try {
+    prepare_frames_folder(database_frames_folder(*config.frames_dir, store.path()));
+  } catch (const std::runtime_error& e) {
+    throw SweepConfigError(config.sweep_file + ": capture.save_frames = \"" + *config.frames_dir +
+                           "\": " + e.what());
+  }
+}
+
 // Homes the bench if the sweep wants it homed and it is not; returns whether
 // the run may start (no abort requested meanwhile).
 bool home_if_needed(const SweepConfig& config, motion::Bench& bench,
                     const telemetry::ControlState& control) {
-  if (config.home_first && !bench.status().homed) {
+  const motion::BenchStatus status = bench.status();
+  if (config.home_first && !status.homed) {
+    // A drive that lost its homing (restarted, or moved before homing)
+    // latches "not homed": homing is refused until the alarm is reset.
+    if (status.alarm) bench.reset_alarm();
     bench.home();
     bench.wait_settled(std::chrono::milliseconds(config.bench_profile.timing.home_timeout_ms));
   }
@@ -35,11 +53,10 @@ db::store::Run resumable_run(const db::store::Store& store, std::int64_t run_id)
   } catch (const db::store::StoreError& e) {
     throw RunMismatch(which + ": " + e.what());
   }
-  const nlohmann::json stored_config =
-      nlohmann::json::parse(run.description.config_json, nullptr, /*allow_exceptions=*/false);
+  const nlohmann::json stored_config = parse_stored_json(run.description.config_json);
   if (stored_config.is_object() && stored_config.contains("replay_of"))
     throw RunMismatch(which + ": run " + std::to_string(run.id) + " is a replay (of " +
-                      stored_config["replay_of"].dump() +
+                      config::excerpt_json(stored_config["replay_of"]) +
                       "); a replay is not resumed on the bench: replay the original run again "
                       "with --replay");
   return run;
@@ -78,6 +95,7 @@ db::store::Store open_run_database(const std::string& path, const SweepConfig& c
 std::optional<StartedRun> start_new_run(const SweepConfig& config, motion::Bench& bench,
                                         db::store::Store& store,
                                         const telemetry::ControlState& control) {
+  check_frames_folder(config, store);
   if (!home_if_needed(config, bench, control)) return std::nullopt;
   return StartedRun{store.start_run(describe_run(config, config.plan)), config.plan};
 }
@@ -87,6 +105,7 @@ std::optional<StartedRun> resume_run(const SweepConfig& config, std::int64_t run
                                      const telemetry::ControlState& control) {
   const db::store::Run run = resumable_run(store, run_id);
   SweepPlan plan = plan_for_resume(run, config);
+  check_frames_folder(config, store);
   if (!home_if_needed(config, bench, control)) return std::nullopt;
   store.resume_run(run.id);
   store.record_event(run.id, "resume", "rig sweep --resume");

@@ -2,6 +2,7 @@
 #include <atomic>
 #include <thread>
 
+#include "config/json.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "telemetry_internal.hpp"
 
@@ -79,6 +80,10 @@ json failure(const std::string& error) {
   return json{{"ok", false}, {"error", error}};
 }
 
+// A control request is one short JSON object ({"command": ..., "reason": ...});
+// anything bigger or deeper is not one.
+const config::JsonLimits kRequestLimits{8, 64u << 10};
+
 std::string trimmed(const std::string& s) {
   const auto first = s.find_first_not_of(" \t\r\n");
   if (first == std::string::npos) return "";
@@ -86,6 +91,53 @@ std::string trimmed(const std::string& s) {
 }
 
 }  // namespace
+
+namespace detail {
+
+json answer_control_request(const std::string& request, int frames, ControlState& state,
+                            const std::function<json()>& status_fn) {
+  if (frames != 1)
+    return failure("request has " + std::to_string(frames) +
+                   " frames: expected one frame of JSON or a bare command word");
+  std::string command;
+  std::string reason;
+  const std::string text = trimmed(request);
+  if (!text.empty() && text.front() == '{') {
+    json r;
+    try {
+      r = config::parse_json(text, "request", kRequestLimits);
+    } catch (const config::JsonInputError& e) {
+      return failure(e.what());
+    }
+    if (!r.is_object() || !r.contains("command") || !r["command"].is_string())
+      return failure("request " + config::excerpt_json(r) +
+                     " has no \"command\" string: expected {\"command\": \"status\"}");
+    command = r["command"].get<std::string>();
+    if (r.contains("reason") && r["reason"].is_string()) reason = r["reason"].get<std::string>();
+  } else {
+    command = text;
+  }
+  if (command == "pause") {
+    state.request_pause();
+  } else if (command == "resume") {
+    state.request_resume();
+  } else if (command == "abort") {
+    state.request_abort(reason.empty() ? "abort requested over the control socket" : reason);
+  } else if (command != "status") {
+    return failure("unknown command \"" + config::excerpt(command) +
+                   "\"; expected status, pause, resume or abort");
+  }
+  json status;
+  try {
+    if (status_fn) status = status_fn();
+  } catch (const std::exception& e) {
+    return failure("command \"" + config::excerpt(command) +
+                   "\" done, but the status failed: " + e.what());
+  }
+  return json{{"ok", true}, {"command", command}, {"status", status}};
+}
+
+}  // namespace detail
 
 struct ControlServer::Impl {
   zmq::socket_t socket;       // REP; used only on `thread` once it runs
@@ -95,47 +147,6 @@ struct ControlServer::Impl {
   ControlState* state = nullptr;
   std::function<json()> status_fn;
   std::thread thread;
-
-  json answer(const std::string& request, int frames) {
-    if (frames != 1)
-      return failure("request has " + std::to_string(frames) +
-                     " frames: expected one frame of JSON or a bare command word");
-    std::string command;
-    std::string reason;
-    const std::string text = trimmed(request);
-    if (!text.empty() && text.front() == '{') {
-      json r;
-      try {
-        r = json::parse(text);
-      } catch (const json::parse_error& e) {
-        return failure(std::string("request is not valid JSON: ") + e.what());
-      }
-      if (!r.contains("command") || !r["command"].is_string())
-        return failure("request " + r.dump() +
-                       " has no \"command\" string: expected {\"command\": \"status\"}");
-      command = r["command"].get<std::string>();
-      if (r.contains("reason") && r["reason"].is_string()) reason = r["reason"].get<std::string>();
-    } else {
-      command = text;
-    }
-    if (command == "pause") {
-      state->request_pause();
-    } else if (command == "resume") {
-      state->request_resume();
-    } else if (command == "abort") {
-      state->request_abort(reason.empty() ? "abort requested over the control socket" : reason);
-    } else if (command != "status") {
-      return failure("unknown command \"" + command +
-                     "\"; expected status, pause, resume or abort");
-    }
-    json status;
-    try {
-      if (status_fn) status = status_fn();
-    } catch (const std::exception& e) {
-      return failure("command \"" + command + "\" done, but the status failed: " + e.what());
-    }
-    return json{{"ok", true}, {"command", command}, {"status", status}};
-  }
 
   void run() {
     for (;;) {
@@ -150,7 +161,7 @@ struct ControlServer::Impl {
           continue;
         json reply;
         try {
-          reply = answer(request, frames);
+          reply = detail::answer_control_request(request, frames, *state, status_fn);
         } catch (const std::exception& e) {
           reply = failure(std::string("internal error: ") + e.what());
         }
@@ -173,8 +184,11 @@ ControlServer::ControlServer(const std::string& endpoint, ControlState& state,
   const std::string stop_name = "inproc://rig-control-stop-" + std::to_string(servers++);
   impl_->state = &state;
   impl_->status_fn = std::move(status_fn);
+  refuse_ipc_over_file(endpoint, "control endpoint");
   try {
     impl_->socket = detail::make_socket(zmq::socket_type::rep, endpoint);
+    // A peer that sends a bigger message is disconnected before it is read.
+    impl_->socket.set(zmq::sockopt::maxmsgsize, static_cast<int64_t>(kRequestLimits.max_bytes));
     impl_->socket.bind(endpoint);
     impl_->endpoint = impl_->socket.get(zmq::sockopt::last_endpoint);
   } catch (const zmq::error_t& e) {
@@ -233,14 +247,14 @@ nlohmann::json send_control(const std::string& endpoint, const std::string& comm
   }
   json reply;
   try {
-    reply = json::parse(text);
-  } catch (const json::parse_error& e) {
-    throw TelemetryError("reply from \"" + endpoint + "\" is not JSON: " + text.substr(0, 80));
+    reply = config::parse_json(text, "reply from \"" + endpoint + "\"");
+  } catch (const config::JsonInputError& e) {
+    throw TelemetryError(e.what());
   }
   if (!reply.is_object() || !reply.contains("ok"))
     throw TelemetryError(
         "reply from \"" + endpoint +
-        "\" is not a control reply (a JSON object with \"ok\"): " + text.substr(0, 80));
+        "\" is not a control reply (a JSON object with \"ok\"): " + config::excerpt(text));
   return reply;
 }
 

@@ -1,11 +1,14 @@
 // Telemetry endpoints, the XPUB publisher and the SUB subscriber.
 #include "rig/telemetry/telemetry.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <mutex>
 
+#include "config/json.hpp"
 #include "telemetry_internal.hpp"
 
 namespace rig::telemetry {
@@ -125,8 +128,21 @@ bool is_loopback(const ParsedEndpoint& p) {
 
 }  // namespace
 
+void refuse_ipc_over_file(const std::string& endpoint, const std::string& what) {
+  const std::string prefix = "ipc://";
+  if (endpoint.rfind(prefix, 0) != 0) return;
+  const std::string path = endpoint.substr(prefix.size());
+  struct stat st {};
+  // lstat: a symbolic link is not followed (libzmq would unlink the link).
+  if (::lstat(path.c_str(), &st) != 0 || S_ISSOCK(st.st_mode)) return;
+  throw EndpointError(what + " \"" + endpoint + "\": \"" + path +
+                      "\" exists and is not a socket (binding would delete it): expected a path "
+                      "that does not exist or a socket left by an earlier run");
+}
+
 void validate_endpoint(const std::string& endpoint, bool allow_remote, const std::string& what) {
   const ParsedEndpoint p = parse_endpoint(endpoint, what);
+  refuse_ipc_over_file(endpoint, what);
   if (!allow_remote && !is_loopback(p))
     throw EndpointError(what + " \"" + endpoint + "\" binds beyond this machine (host \"" + p.host +
                         "\"): expected a loopback host (127.0.0.1, [::1], localhost), ipc:// or "
@@ -168,6 +184,7 @@ struct TelemetryPublisher::Impl {
 };
 
 TelemetryPublisher::TelemetryPublisher(const std::string& endpoint) : impl_(new Impl) {
+  refuse_ipc_over_file(endpoint, "publish endpoint");
   try {
     impl_->socket = make_socket(zmq::socket_type::xpub, endpoint);
     // A slow subscriber loses messages beyond this rather than holding memory
@@ -261,14 +278,13 @@ std::optional<nlohmann::json> TelemetrySubscriber::receive(std::chrono::millisec
   }
   nlohmann::json message;
   try {
-    message = nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw TelemetryError("telemetry from \"" + impl_->endpoint +
-                         "\" is not JSON: " + text.substr(0, 80) + " (" + e.what() + ")");
+    message = config::parse_json(text, "telemetry from \"" + impl_->endpoint + "\"");
+  } catch (const config::JsonInputError& e) {
+    throw TelemetryError(e.what());
   }
   if (!message.is_object() || frames != 1)
     throw TelemetryError("telemetry from \"" + impl_->endpoint +
-                         "\" is not a single-frame JSON object: " + text.substr(0, 80));
+                         "\" is not a single-frame JSON object: " + config::excerpt(text));
   return message;
 }
 

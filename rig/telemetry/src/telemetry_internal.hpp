@@ -3,8 +3,12 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <zmq.hpp>
+
+#include "rig/telemetry/telemetry.hpp"
 
 namespace rig::telemetry::detail {
 
@@ -28,5 +32,12 @@ inline std::chrono::milliseconds time_left(std::chrono::steady_clock::time_point
 // is queued. Frames after the first are appended, so a multipart message is
 // read whole and can be rejected as one.
 bool receive_all(zmq::socket_t& socket, std::string& text, int& frames);
+
+// The control server's answer to one request of `frames` frames whose bytes
+// are `request` (docs/telemetry.md): acts on `state` and returns the reply
+// ({"ok": true, "command", "status": status_fn()} or {"ok": false,
+// "error"}). Any bytes at all give a reply; only status_fn may throw.
+nlohmann::json answer_control_request(const std::string& request, int frames, ControlState& state,
+                                      const std::function<nlohmann::json()>& status_fn);
 
 }  // namespace rig::telemetry::detail

@@ -156,6 +156,17 @@ void BenchDynamics::home() {
   // Already there: homing completes on the next step.
 }
 
+void BenchDynamics::power_cycle() {
+  for (Axis* a : {&x_, &y_}) {
+    a->v = 0;
+    a->target = a->motor;
+    a->moving = false;
+  }
+  homed_ = !config_.require_homing;
+  homing_ = false;
+  alarm_code_ = kAlarmNone;
+}
+
 void BenchDynamics::stop() {
   homing_ = false;
   decelerate(x_);

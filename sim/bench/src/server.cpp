@@ -106,6 +106,16 @@ void BenchServer::restart_network(std::chrono::milliseconds downtime) {
   start_network();
 }
 
+void BenchServer::power_cycle(std::chrono::milliseconds downtime) {
+  stop_network();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    dynamics_.power_cycle();
+  }
+  std::this_thread::sleep_for(downtime);
+  start_network();
+}
+
 void BenchServer::start_network() {
   if (network_.joinable()) return;
   const bool rtu = !options_.rtu_device.empty();

@@ -112,6 +112,31 @@ TEST(RigBench, MoveOutsideTheSoftLimitsExitsWithBadInput) {
   EXPECT_NE(out.find("refused, nothing sent"), std::string::npos) << out;
 }
 
+// A speed that is not a positive finite number, or that rounds to 0 in the
+// drive's units (the simulated drive's speed register is in whole mm/s, so
+// 0.4 mm/s is written as 0), is refused before anything is sent: exit 2, the
+// speed named, and the bench still where it was.
+TEST(RigBench, SpeedThatIsNotPositiveOrRoundsToZeroIsRefused) {
+  ChildProcess sim({kRig, "sim", "bench", "--port", "0", "--config", kSim, "--time-scale", "20"});
+  const int port = start_sim(sim);
+  int status = -1;
+  rig_bench("home", port, &status);
+  ASSERT_EQ(status, 0);
+  for (const std::string speed : {"0", "-5", "nan", "inf", "0.4"}) {
+    const std::string out = rig_bench("move 45 15 --speed=" + speed, port, &status);
+    EXPECT_EQ(status, 2) << speed << ": " << out;
+    EXPECT_NE(out.find("rig bench: speed"), std::string::npos) << speed << ": " << out;
+  }
+  EXPECT_NE(rig_bench("move 45 15 --speed=0.4", port, &status).find("rounds to 0"),
+            std::string::npos);
+  const std::string out = rig_bench("status", port, &status);
+  EXPECT_NE(out.find("position x 0.0000 mm, y 0.0000 mm"), std::string::npos) << out;
+  // The smallest speed the drive takes (0.5 mm/s rounds to 1) moves.
+  EXPECT_NE(rig_bench("jog 0.5 0 --speed=0.5", port, &status).find("position x 0.5000 mm"),
+            std::string::npos);
+  EXPECT_EQ(status, 0);
+}
+
 TEST(RigBench, MoveBeforeHomingFailsWithTheAlarmsMeaning) {
   ChildProcess sim({kRig, "sim", "bench", "--port", "0", "--config", kSim, "--time-scale", "20"});
   const int port = start_sim(sim);

@@ -56,7 +56,13 @@ class ScriptedBench : public motion::Bench {
     }
     return {settled_.x_mm + drift_mm, settled_.y_mm};
   }
-  motion::BenchStatus status() override { return wait_settled(0ms); }
+  // The state as it stands; scripted faults belong to wait_settled alone.
+  motion::BenchStatus status() override {
+    motion::BenchStatus s;
+    s.position = at_;
+    s.homed = s.in_position = true;
+    return s;
+  }
   void stop() override {}
   void reset_alarm() override {}
 

@@ -15,6 +15,7 @@
 
 #include "db/store/sha256.hpp"
 #include "db/store/store.hpp"
+#include "rig/sweep/frame_files.hpp"
 #include "sim_rig_fixture.hpp"
 
 namespace {
@@ -59,7 +60,9 @@ TEST(SweepReplay, ReplaysSavedFramesIntoANewRunWithIdenticalResultsAndFailsChang
     ASSERT_EQ(rows.size(), 6u);
     for (const std::string& row : rows) {
       const std::string path = row.substr(0, row.find(' '));
-      EXPECT_EQ(fs::path(path).parent_path(), fs::path(rig.file("frames")) / "run1") << row;
+      EXPECT_EQ(fs::path(path).parent_path(),
+                rig::sweep::run_frames_folder(rig.file("frames"), rig.database(), 1))
+          << row;
       EXPECT_EQ(db::store::sha256_hex(file_bytes(path)), row.substr(row.find(' ') + 1)) << row;
     }
   }
@@ -117,7 +120,7 @@ TEST(SweepReplay, ReplaysSavedFramesIntoANewRunWithIdenticalResultsAndFailsChang
     ASSERT_EQ(full.frames.size(), 2u);
     EXPECT_EQ(full.frames[0].source, *store.position(1, 1).frames[0].image_path);
     EXPECT_FALSE(full.frames[0].image_path.has_value());
-    EXPECT_FALSE(fs::exists(fs::path(rig.file("frames")) / "run2"));
+    EXPECT_FALSE(fs::exists(rig::sweep::run_frames_folder(rig.file("frames"), rig.database(), 2)));
   }
 
   // A PNG changed after the run: its position fails in the replay, naming

@@ -9,10 +9,14 @@
 #include <random>
 #include <regex>
 #include <set>
+#include <sstream>
 #include <string>
 #include <thread>
 
 #include "db/store/store.hpp"
+#include "motion/bench_url.hpp"
+#include "motion/errors.hpp"
+#include "motion/modbus_bench.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "sim_rig_fixture.hpp"
 #include "vision/solvers.hpp"
@@ -289,6 +293,68 @@ TEST(SweepEndToEnd, ABenchServerRestartMidSweepIsRiddenOut) {
   // carry the sweep through.
   rig.bench().restart_network(1000ms);
   EXPECT_EQ(wait_exit(*child, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+}
+
+// The drive restarts mid-sweep (power cycle: the link goes for 1 s and the
+// drive comes back not homed). The controller homes it again (alarm reset
+// first) before retrying the move, instead of provoking "not homed", and
+// every position is measured against the new homing.
+TEST(SweepEndToEnd, ABenchThatRestartsMidSweepIsHomedAgainAndTheRunCompletes) {
+  SimRig rig;
+  const std::string sweep = rig.write_sweep(SweepFileOptions{});  // on_alarm = "abort"
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  rig.bench().power_cycle(1000ms);
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+  EXPECT_EQ(db.count("SELECT count(*) FROM run_events WHERE kind = 'alarm'"), 0);
+  EXPECT_EQ(db.count("SELECT count(*) FROM run_events WHERE kind = 'home'"), 1);
+  expect_positions_whole(db, 2);
+}
+
+// The resume command a stopped run prints works as printed on a bench that
+// restarted and latched "not homed" (alarm 3) since: resume resets the alarm
+// before homing.
+TEST(SweepEndToEnd, ThePrintedResumeCommandWorksOnABenchThatLatchedNotHomed) {
+  SimRig rig;
+  const std::string sweep = rig.write_sweep(SweepFileOptions{});
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  ASSERT_EQ(child->signal_and_wait(SIGINT, 30s), std::optional<int>(1));
+  std::string resume_line;
+  while (const auto line = child->read_line(200ms))
+    if (line->find("resume:") != std::string::npos) resume_line = *line;
+  ASSERT_FALSE(resume_line.empty()) << "no resume command printed";
+  rig.bench().power_cycle(0ms);
+  {
+    // What a person does next at a restarted bench: tries a move, which the
+    // drive refuses with alarm 3 and latches.
+    motion::ModbusBench bench(
+        motion::BenchUrl::parse(rig.bench().url()),
+        motion::load_drive_profile(rig_test::repo_path("config/benches/sim.toml")));
+    EXPECT_THROW(
+        {
+          bench.move_to(300, 150);
+          bench.wait_settled(5s);
+        },
+        motion::BenchFault);
+    ASSERT_TRUE(bench.status().alarm);
+  }
+  // "  resume:    rig sweep FILE --db DB --resume 1", run as printed.
+  const std::string printed = "rig sweep ";
+  ASSERT_NE(resume_line.find(printed), std::string::npos) << resume_line;
+  const std::string command = resume_line.substr(resume_line.find(printed) + printed.size());
+  std::istringstream words(command);
+  std::vector<std::string> args;
+  for (std::string w; words >> w;)
+    args.push_back(w);
+  auto resumed = start_sweep(args);
+  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);

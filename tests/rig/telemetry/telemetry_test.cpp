@@ -3,9 +3,14 @@
 #include "rig/telemetry/telemetry.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <sys/un.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <thread>
 #include <zmq.hpp>
 
@@ -233,6 +238,50 @@ TEST(Endpoints, PublishAndControlMustDiffer) {
   EXPECT_NE(endpoint_error(endpoints).find("both \"tcp://127.0.0.1:5556\""), std::string::npos);
 }
 
+// libzmq unlinks whatever is at an ipc:// path before binding: a path that
+// exists and is not a socket is refused, and the file is left as it was.
+TEST(Endpoints, IpcPathOverAnExistingFileIsRefusedAndTheFileKept) {
+  const std::string path = ::testing::TempDir() + "rig-ipc-existing-file";
+  { std::ofstream(path) << "precious"; }
+  const std::string endpoint = "ipc://" + path;
+  EXPECT_THROW(rig::telemetry::validate_endpoint(endpoint, false, "publish endpoint"),
+               rig::telemetry::EndpointError);
+  try {
+    rig::telemetry::TelemetryPublisher publisher(endpoint);
+    FAIL() << "bound over " << path;
+  } catch (const rig::telemetry::EndpointError& e) {
+    EXPECT_NE(std::string(e.what()).find("exists and is not a socket"), std::string::npos)
+        << e.what();
+  }
+  rig::telemetry::ControlState state;
+  EXPECT_THROW(rig::telemetry::ControlServer(endpoint, state, [] { return json::object(); }),
+               rig::telemetry::EndpointError);
+  std::ifstream in(path);
+  std::string text;
+  in >> text;
+  EXPECT_EQ(text, "precious");
+  std::remove(path.c_str());
+}
+
+// A socket left by an earlier run is bound over as before.
+TEST(Endpoints, IpcPathOfAnEarlierSocketIsReused) {
+  const std::string path = ::testing::TempDir() + "rig-ipc-reused";
+  std::remove(path.c_str());
+  const std::string endpoint = "ipc://" + path;
+  {
+    // A socket file whose process is gone, as a killed sweep leaves it.
+    const int fd = ::socket(AF_UNIX, SOCK_STREAM, 0);
+    sockaddr_un address{};
+    address.sun_family = AF_UNIX;
+    std::snprintf(address.sun_path, sizeof address.sun_path, "%s", path.c_str());
+    ASSERT_EQ(::bind(fd, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    ::close(fd);
+  }
+  EXPECT_NO_THROW(rig::telemetry::validate_endpoint(endpoint, false, "publish endpoint"));
+  rig::telemetry::TelemetryPublisher second(endpoint);
+  EXPECT_EQ(second.endpoint(), endpoint);
+}
+
 TEST(Endpoints, EndpointErrorIsATelemetryError) {
   rig::telemetry::TelemetryEndpoints endpoints;
   endpoints.publish = "nonsense";
@@ -369,11 +418,12 @@ TEST_F(Control, UnknownCommandIsRefusedListingTheCommands) {
 
 // A REQ client of its own that sends `text` as given (send_control always
 // sends JSON), as a client in another language might.
-json raw_request(const std::string& endpoint, const std::string& text) {
+json raw_request(const std::string& endpoint, const std::string& text,
+                 std::chrono::milliseconds patience = kPatience) {
   zmq::context_t context;
   zmq::socket_t socket(context, zmq::socket_type::req);
   socket.set(zmq::sockopt::linger, 0);
-  socket.set(zmq::sockopt::rcvtimeo, static_cast<int>(kPatience.count()));
+  socket.set(zmq::sockopt::rcvtimeo, static_cast<int>(patience.count()));
   socket.connect(endpoint);
   socket.send(zmq::buffer(text), zmq::send_flags::none);
   zmq::message_t reply;
@@ -390,6 +440,38 @@ TEST_F(Control, AcceptsBareWordsAndRejectsMalformedJson) {
   const json no_command = raw_request(server.endpoint(), "{\"reason\": \"x\"}");
   EXPECT_EQ(no_command["ok"], false);
   EXPECT_NE(no_command["error"].get<std::string>().find("no \"command\""), std::string::npos);
+}
+
+// {"a": [[[...]]]} nested 200,000 deep: before the bounded parser, the
+// reply's "request <dump>" recursed once per level and killed the sweep.
+TEST_F(Control, DeeplyNestedRequestIsRefusedAndTheServerKeepsAnswering) {
+  constexpr int kDepth = 200000;
+  const std::string request =
+      "{\"a\": " + std::string(kDepth, '[') + std::string(kDepth, ']') + "}";
+  // 400 kB: beyond the request's size bound (64 KiB), so libzmq drops the
+  // peer before anything is parsed: no reply (a reply takes well under 1 s
+  // on loopback, so 1 s of silence is the drop)...
+  EXPECT_EQ(raw_request(server.endpoint(), request, 1000ms)["ok"], "no reply");
+  // ...and within it, the depth bound (8 levels) refuses it by name.
+  constexpr int kSmallDepth = 20000;
+  const std::string small =
+      "{\"a\": " + std::string(kSmallDepth, '[') + std::string(kSmallDepth, ']') + "}";
+  const json reply = raw_request(server.endpoint(), small);
+  EXPECT_EQ(reply["ok"], false);
+  const std::string error = reply["error"].get<std::string>();
+  EXPECT_NE(error.find("request: nests arrays or objects more than 8 levels deep"),
+            std::string::npos)
+      << error;
+  EXPECT_FALSE(state.abort_requested());
+  EXPECT_EQ(send("status")["ok"], true) << "the server still answers";
+}
+
+// An error message quotes at most an excerpt of a request, however long.
+TEST_F(Control, ALongCommandIsQuotedAsAnExcerpt) {
+  const std::string word(60000, 'x');
+  const json reply = raw_request(server.endpoint(), "{\"command\": \"" + word + "\"}");
+  EXPECT_EQ(reply["ok"], false);
+  EXPECT_LT(reply["error"].get<std::string>().size(), 300u) << "80 characters quoted, plus text";
 }
 
 TEST_F(Control, ServerKeepsAnsweringAfterAStatusFunctionThrows) {

@@ -63,7 +63,10 @@ class Camera {
   //    `camera_matrix: {rows, cols, data}`, `distortion_model: plumb_bob`,
   //    `distortion_coefficients: {rows, cols, data}`.
   // Throws CalibrationError naming the file and the key on a missing file, a
-  // missing key, a malformed matrix or an unsupported distortion model.
+  // missing key, a malformed matrix or an unsupported distortion model, and
+  // naming the file (and line) before OpenCV parses it when it is not a
+  // regular file, is larger than 1 MiB or nests more than 32 levels deep
+  // (OpenCV's parsers recurse once per level).
   static Camera load(const std::string& path);
 
   // Writes the calibration as an OpenCV FileStorage file (.yaml, .yml or .xml).

@@ -32,6 +32,12 @@ db::store::RunDescription describe_run(
 // {"opencv": "4.6.0", "aravis": ..., "libmodbus": ..., "sqlite": ..., "zeromq": ..., "eigen": ...}
 nlohmann::json library_versions();
 
+// A JSON text a run database stores (a run's configuration or plan), parsed
+// within config::JsonLimits (config/json.hpp): a text that is not JSON, or is
+// too big or too deeply nested for one rig wrote, gives a discarded value
+// (is_discarded()), so a damaged or crafted database cannot crash a reader.
+nlohmann::json parse_stored_json(const std::string& text);
+
 // For `rig sweep --resume RUN`: the run's stored plan, after checking that
 // every file the config read has the SHA-256 the run stored (a resumed run
 // must measure with what it started with). Throws RunMismatch naming the

@@ -60,9 +60,17 @@ struct TelemetryEndpoints {
 
 // Checks one endpoint's syntax (tcp://HOST:PORT with PORT 1..65535 or *,
 // ipc://PATH, inproc://NAME) and, unless allow_remote, that it stays on this
-// machine. `what` names the endpoint in the message ("publish endpoint").
+// machine, and that an ipc:// path is not an existing file (see below).
+// `what` names the endpoint in the message ("publish endpoint").
 // Throws EndpointError naming the endpoint, the value and what was expected.
 void validate_endpoint(const std::string& endpoint, bool allow_remote, const std::string& what);
+
+// libzmq deletes whatever is at an ipc:// path before it binds. Throws
+// EndpointError when `endpoint` is ipc://PATH and PATH exists (as anything,
+// a symbolic link included) but is not a socket; a socket left by an earlier
+// run is replaced as before. The publisher and the control server check this
+// before they bind.
+void refuse_ipc_over_file(const std::string& endpoint, const std::string& what);
 
 // Checks both endpoints as validate_endpoint does, and that they differ.
 // Throws EndpointError (a TelemetryError) naming the offending endpoint.

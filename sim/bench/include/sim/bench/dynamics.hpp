@@ -40,6 +40,10 @@ class BenchDynamics {
   void reset_alarm();                // clears the alarm (not an emergency stop)
   void raise_alarm(int code);        // decelerates to a standstill, alarm bit + code
   void set_emergency_stop(bool on);  // on: immediate standstill, moves ignored
+  // The drive loses power and comes back: both axes stand where they are
+  // (absolute encoders), the homing is lost (when require_homing), any
+  // homing or alarm is cleared.
+  void power_cycle();
   void arm_alarm_at(const std::optional<AlarmAt>& at) { alarm_at_ = at; }
 
   double encoder_x_mm() const { return quantize(x_.motor); }

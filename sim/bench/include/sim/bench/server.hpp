@@ -1,8 +1,8 @@
 // sim::bench::BenchServer: the simulated XY bench as a real Modbus server (libmodbus)
 // serving a drive profile's register map, by default rig's own map
-// (docs/register-map.md) from config/benches/sim.toml. Over TCP on loopback it serves several clients at
-// once; it can also serve one RTU serial line (e.g. one end of a socat pty
-// pair). Any Modbus client (ModbusBench, mbpoll, a PLC) can drive it.
+// (docs/register-map.md) from config/benches/sim.toml. Over TCP on loopback it serves several
+// clients at once; it can also serve one RTU serial line (e.g. one end of a socat pty pair). Any
+// Modbus client (ModbusBench, mbpoll, a PLC) can drive it.
 //
 // Threads: one network thread (a select() loop over the listening socket and
 // the clients, woken by a pipe, so stop() returns promptly) and one physics
@@ -67,6 +67,10 @@ class BenchServer {
   // listens again on the same port after `downtime` (a gateway reboot).
   // Blocks for `downtime`.
   void restart_network(std::chrono::milliseconds downtime);
+  // The drive restarts (a power cycle): the network goes away as in
+  // restart_network, and the drive comes back standing, not homed, without an
+  // alarm (BenchDynamics::power_cycle). Blocks for `downtime`.
+  void power_cycle(std::chrono::milliseconds downtime);
 
   // TCP port actually listened on (after start()).
   int port() const { return port_; }
