@@ -170,7 +170,7 @@ std::vector<std::pair<std::string, std::string>> run_header(const RunStudy& st) 
 }
 
 Section summary_section(const ReportInput& in) {
-  Section sec{"summary", "Summary", {}};
+  Section sec{"run-summary", "Summary", {}};
   sec.facts(run_header(in.study));
   std::string coinciding;
   for (const SolverStudy& s : in.study.solvers) {
