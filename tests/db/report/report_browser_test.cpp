@@ -61,7 +61,7 @@ TEST(ReportBrowser, TenSolversAt1400PixelsFitWithDistinctColours) {
   rig_test::SyntheticRunSpec spec;
   spec.positions = 40;
   spec.solvers = rig_test::paper_like_solvers();
-  const char* more[] = {"ippe", "lm", "oi", "epnp", "opencv_iterative", "sqpnp"};
+  const char* more[] = {"dls", "lm", "oi", "epnp", "opencv_iterative", "sqpnp"};
   for (int i = 0; i < 6; ++i) {
     rig_test::SyntheticSolver s;
     s.name = more[i];

@@ -43,7 +43,8 @@ TEST(ReportUnits, PicksTheUnitAndDecimalsFromTheColumnsLargestValue) {
   EXPECT_EQ(ms.symbol, "ms");
   EXPECT_EQ(db::report::fixed(1.76e-5, ms), "0.018");
   EXPECT_EQ(db::report::display_unit(Quantity::kDuration, 1.75e-5).symbol, "µs");
-  // Rates in % (100 % has three digits: one decimal), slopes with their fourth decimal, NaN as n/a, no "-0".
+  // Rates in % (100 % has three digits: one decimal), slopes with their fourth decimal, NaN as n/a,
+  // no "-0".
   EXPECT_EQ(db::report::fixed(0.956, db::report::display_unit(Quantity::kFraction, 1.0)), "95.6");
   EXPECT_EQ(db::report::fixed(1.0084, db::report::display_unit(Quantity::kPlain, 1.0084)),
             "1.0084");
