@@ -25,6 +25,9 @@ std::string file_fact(const store::StoredFile& f) {
 std::string rig_fact(const store::Run& run) {
   if (!run.camera) return "not recorded (camera not recorded)";
   const store::RunCamera& c = *run.camera;
+  // Aravis's own fake GigE camera (arv-fake-gv-camera) is never a bench camera.
+  if (c.vendor == "Aravis" && c.model == "Fake")
+    return "simulated camera (Aravis fake GigE camera; realism not reported)";
   if (c.model != "rig-sim") return "bench";
   const std::string prefix = "realism ";
   const std::string profile = c.device_version.rfind(prefix, 0) == 0

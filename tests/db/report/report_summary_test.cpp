@@ -138,6 +138,13 @@ TEST_F(ReportSummary, HeaderNamesTheSimulatedRigAndItsRealism) {
   }
   EXPECT_NE(page(dir_.file("run.db")).find("<dt>Measured on</dt><dd>bench</dd>"),
             std::string::npos);
+  {
+    db::store::Store store(dir_.file("run.db"));
+    store.record_camera(
+        1, {"gige:127.0.0.1", "Aravis-Fake-RIGSIM01", "Aravis", "Fake", "RIGSIM01", "0.8.26"});
+  }
+  EXPECT_NE(page(dir_.file("run.db")).find("<dd>simulated camera (Aravis fake GigE camera"),
+            std::string::npos);
 }
 
 // Two solvers that compute the same pose share one summary row and one
