@@ -192,10 +192,12 @@ bool chromium_available() {
   return ::access(kChromium, X_OK) == 0;
 }
 
-BrowserResult render_in_chromium(const std::string& html_path, const std::string& screenshot_png) {
+BrowserResult render_in_chromium(const std::string& html_path, const std::string& screenshot_png,
+                                 int window_width) {
   BrowserResult result;
   const std::string url = file_url(html_path);
-  const ProcessRun dom = run_chromium({"--dump-dom"}, url);
+  const std::string width = std::to_string(window_width);
+  const ProcessRun dom = run_chromium({"--dump-dom", "--window-size=" + width + ",900"}, url);
   result.dom = dom.out;
   result.stderr_text = dom.err;
   result.console_errors = console_messages(dom.err);
@@ -206,7 +208,7 @@ BrowserResult render_in_chromium(const std::string& html_path, const std::string
 
   std::error_code ignored;
   std::filesystem::remove(screenshot_png, ignored);  // a stale PNG must not pass
-  const std::string size = "--window-size=1280," + std::to_string(page_height(dom.out));
+  const std::string size = "--window-size=" + width + "," + std::to_string(page_height(dom.out));
   const ProcessRun shot = run_chromium({"--screenshot=" + screenshot_png, size}, url);
   result.stderr_text += shot.err;
   result.timed_out = result.timed_out || shot.timed_out;

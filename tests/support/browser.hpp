@@ -29,14 +29,17 @@ struct BrowserResult {
 // --disable-background-networking --disable-component-update --no-first-run),
 // a new empty --user-data-dir (removed after), --virtual-time-budget=5000 so
 // load handlers run, and --enable-logging=stderr --v=0 for the console:
-//   1. --dump-dom: fills `dom` and `console_errors`;
-//   2. --screenshot=<screenshot_png> --window-size=1280,<h>, h the page height
+//   1. --dump-dom --window-size=<window_width>,900: fills `dom` and `console_errors`;
+//   2. --screenshot=<screenshot_png> --window-size=<window_width>,<h>, h the page height
 //      the page reported in <body data-page-height> (see db/html_page.hpp),
 //      else 2000 px, clamped to [600, 16000].
 // Each run is killed (with its process group) after 60 s. Chromium's own log
 // lines (dbus, gpu, ...) are ignored: only console lines are collected.
 // screenshot_png "" skips the second run.
-BrowserResult render_in_chromium(const std::string& html_path, const std::string& screenshot_png);
+// window_width: the CSS width of both runs' window (the first run's is
+// window_width x 900).
+BrowserResult render_in_chromium(const std::string& html_path, const std::string& screenshot_png,
+                                 int window_width = 1280);
 
 // /usr/bin/chromium exists and is executable.
 bool chromium_available();

@@ -195,8 +195,19 @@ std::size_t add_frames(const SyntheticRunSpec& spec, Draws& draws, db::store::Po
     frame.host_timestamp_ns = 1'700'000'000'000'000'000LL + 1'000'000'000LL * i + f;
     frame.source = "synthetic";
     add_detections(spec, i, d, side_px, draws, frame);
-    for (const SyntheticSolver& s : spec.solvers)
-      add_estimates(spec, s, d, draws, frame);
+    for (const SyntheticSolver& s : spec.solvers) {
+      if (s.same_draws_as.empty()) {
+        add_estimates(spec, s, d, draws, frame);
+        continue;
+      }
+      const std::size_t n = frame.estimates.size();
+      for (std::size_t k = 0; k < n; ++k) {
+        if (frame.estimates[k].solver != s.same_draws_as) continue;
+        db::store::EstimateRecord copy = frame.estimates[k];
+        copy.solver = s.name;
+        frame.estimates.push_back(copy);
+      }
+    }
     estimates += frame.estimates.size();
     p.frames.push_back(std::move(frame));
   }

@@ -39,6 +39,10 @@ struct SyntheticSolver {
   // about the camera x axis from the scope-"target" rotation (a flip).
   double flip_rate = 0.0;
   double time_us = 50.0;
+  // Non-empty: this solver's estimates are those of the solver of that name
+  // (listed earlier) in every frame, renamed: the same pose computed by a
+  // second implementation. Its other fields are not used.
+  std::string same_draws_as;
 };
 
 struct SyntheticRunSpec {

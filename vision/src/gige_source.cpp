@@ -76,13 +76,23 @@ void check(GError* error, const std::string& who, const std::string& what) {
                                        : std::string()));
 }
 
-// The id as Aravis's discovery lists it: vendor-model-serial.
-std::string device_id_of(ArvCamera* camera) {
-  const char* vendor = arv_camera_get_vendor_name(camera, nullptr);
-  const char* model = arv_camera_get_model_name(camera, nullptr);
-  const char* serial = arv_camera_get_device_serial_number(camera, nullptr);
-  return std::string(vendor ? vendor : "") + "-" + (model ? model : "") + "-" +
-         (serial ? serial : "");
+// The GenICam Device* features; the id as Aravis's discovery lists it:
+// vendor-model-serial. A feature the camera lacks reads as "".
+CameraIdentity identity_of(ArvCamera* camera) {
+  auto text = [](const char* value) { return std::string(value ? value : ""); };
+  CameraIdentity id;
+  id.vendor = text(arv_camera_get_vendor_name(camera, nullptr));
+  id.model = text(arv_camera_get_model_name(camera, nullptr));
+  id.serial = text(arv_camera_get_device_serial_number(camera, nullptr));
+  GError* error = nullptr;
+  const char* version =
+      arv_device_get_string_feature_value(arv_camera_get_device(camera), "DeviceVersion", &error);
+  if (error != nullptr)
+    g_clear_error(&error);
+  else
+    id.device_version = text(version);
+  id.device_id = id.vendor + "-" + id.model + "-" + id.serial;
+  return id;
 }
 
 // The region of interest the options ask for, the camera's own where they
@@ -247,7 +257,7 @@ void GigeSource::open() {
     }
   } guard{this, &impl};
 
-  device_id_ = device_id_of(impl->camera);
+  identity_ = identity_of(impl->camera);
   impl->control_lost_handler = g_signal_connect(arv_camera_get_device(impl->camera), "control-lost",
                                                 G_CALLBACK(on_control_lost), &impl->control_lost);
   configure(impl->camera, options_, who);

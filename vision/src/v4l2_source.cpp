@@ -61,6 +61,16 @@ void V4l2Source::open() {
   v4l2_capability cap{};
   if (xioctl(fd_, VIDIOC_QUERYCAP, &cap) != 0)
     fail("not a V4L2 device (VIDIOC_QUERYCAP: " + errno_text() + ")");
+  auto field = [](const __u8* text, size_t size) {
+    const char* begin = reinterpret_cast<const char*>(text);
+    return std::string(begin, strnlen(begin, size));
+  };
+  identity_.vendor = field(cap.driver, sizeof cap.driver);
+  identity_.model = field(cap.card, sizeof cap.card);
+  identity_.serial = field(cap.bus_info, sizeof cap.bus_info);
+  identity_.device_version = "driver " + std::to_string((cap.version >> 16) & 0xff) + "." +
+                             std::to_string((cap.version >> 8) & 0xff) + "." +
+                             std::to_string(cap.version & 0xff);
   const uint32_t caps =
       (cap.capabilities & V4L2_CAP_DEVICE_CAPS) ? cap.device_caps : cap.capabilities;
   if (!(caps & V4L2_CAP_VIDEO_CAPTURE)) fail("V4L2 device is not a video capture device");

@@ -40,11 +40,19 @@ td.num { text-align: right; font-variant-numeric: tabular-nums; white-space: now
 td.better { background: #e2f2e2; font-weight: 600; }
 td.worse { background: #f9e0e0; text-decoration: underline; }
 td.paper { color: #444; font-style: italic; }
+.table-wrap { max-width: 100%; overflow-x: auto; }
+details.table { margin: 1rem 0; }
+details.table > summary { cursor: pointer; font-weight: bold; }
+dl.facts { display: grid; grid-template-columns: max-content minmax(0, 1fr); gap: 0.15rem 1rem;
+  margin: 1rem 0; }
+dl.facts dt { font-weight: bold; }
+dl.facts dd { margin: 0; overflow-wrap: anywhere; }
 @media print {
   body { max-width: none; padding: 0; color: #000; background: #fff; font-size: 10.5pt; }
   a { color: #000; text-decoration: none; }
   nav.toc { background: none; }
   figure, table, pre { break-inside: avoid; page-break-inside: avoid; }
+  .table-wrap { overflow: visible; }
   h1, h2, h3, h4, h5, h6, caption { break-after: avoid; page-break-after: avoid; }
   thead { display: table-header-group; }
   td.better, td.worse, thead th { background: none; }
@@ -81,6 +89,8 @@ constexpr const char* kLoadCheck = R"js(
     body.setAttribute('data-figures-rendered', String(rendered));
     body.setAttribute('data-figures-empty', String(empty));
     body.setAttribute('data-page-height', String(Math.ceil(document.documentElement.scrollHeight)));
+    body.setAttribute('data-page-width', String(Math.ceil(document.documentElement.scrollWidth)));
+    body.setAttribute('data-viewport-width', String(document.documentElement.clientWidth));
   }
   if (document.readyState === 'complete') check(); else window.addEventListener('load', check);
 })();
@@ -149,6 +159,13 @@ void Page::paragraph(const std::string& text) {
   body_ += "<p>" + escape(text) + "</p>\n";
 }
 
+void Page::facts(const std::vector<std::pair<std::string, std::string>>& facts) {
+  body_ += "<dl class=\"facts\">\n";
+  for (const auto& [term, value] : facts)
+    body_ += "<dt>" + escape(term) + "</dt><dd>" + escape(value) + "</dd>\n";
+  body_ += "</dl>\n";
+}
+
 void Page::table(const Table& t) {
   if (!t.id.empty()) claim_id(t.id, "table");
   const std::string name = t.id.empty() ? "'" + t.caption + "'" : "'" + t.id + "'";
@@ -157,7 +174,14 @@ void Page::table(const Table& t) {
       throw std::invalid_argument("html::Page::table: table " + name + " row " + std::to_string(r) +
                                   " has " + std::to_string(t.rows[r].size()) + " cells, expected " +
                                   std::to_string(t.header.size()) + " (the header's)");
-  body_ += "<table" + (t.id.empty() ? std::string() : " id=\"" + t.id + "\"") + ">\n";
+  if (t.folded) {
+    body_ += "<details class=\"table\"><summary>" +
+             escape((t.caption.empty() ? std::string("Table") : t.caption) + " (" +
+                    std::to_string(t.rows.size()) + " rows)") +
+             "</summary>\n";
+  }
+  body_ += "<div class=\"table-wrap\">\n<table" +
+           (t.id.empty() ? std::string() : " id=\"" + t.id + "\"") + ">\n";
   if (!t.caption.empty()) body_ += "<caption>" + escape(t.caption) + "</caption>\n";
   if (!t.header.empty()) {
     body_ += "<thead><tr>";
@@ -176,7 +200,8 @@ void Page::table(const Table& t) {
     }
     body_ += "</tr>\n";
   }
-  body_ += "</tbody>\n</table>\n";
+  body_ += "</tbody>\n</table>\n</div>\n";
+  if (t.folded) body_ += "</details>\n";
 }
 
 void Page::figure(const svg::Figure& f) {

@@ -22,6 +22,13 @@ void Section::table(html::Table table) {
   blocks.push_back(std::move(b));
 }
 
+void Section::facts(std::vector<std::pair<std::string, std::string>> facts) {
+  Block b;
+  b.kind = Block::Kind::kFacts;
+  b.facts = std::move(facts);
+  blocks.push_back(std::move(b));
+}
+
 bool Section::figure(svg::Figure figure) {
   bool any = false;
   for (const svg::Series& s : figure.series) {
@@ -51,6 +58,17 @@ std::string colour_of(std::size_t index) {
   return svg::detail::kPalette[index % static_cast<std::size_t>(svg::detail::kPaletteSize)];
 }
 
+int marker_of(std::size_t index) {
+  return static_cast<int>(index % 10);
+}
+
+std::string series_label(const RunStudy& study, const SolverStudy& s) {
+  std::string label = s.solver;
+  for (const std::string& other : study.coinciding(s))
+    label += " = " + other;
+  return label;
+}
+
 namespace {
 
 std::string run_line(const RunStudy& s) {
@@ -63,7 +81,7 @@ std::string run_line(const RunStudy& s) {
 
 Section overview(const ReportInput& in) {
   const RunStudy& s = in.study;
-  Section sec{"overview", "store::Run", {}};
+  Section sec{"overview", "What the run holds", {}};
   sec.paragraph(run_line(s));
   if (s.run.status != store::RunStatus::kCompleted) {
     sec.paragraph("This run did not complete: its figures cover only the positions it measured.");
@@ -107,6 +125,7 @@ Section overview(const ReportInput& in) {
 Document build_document(const ReportInput& in) {
   Document doc;
   doc.title = "rig report: run " + std::to_string(in.study.run.id);
+  doc.sections.push_back(summary_section(in));
   doc.sections.push_back(overview(in));
   if (in.baseline) {
     Section sec{"against-baseline", "Against the baseline", {}};

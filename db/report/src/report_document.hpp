@@ -18,8 +18,9 @@
 namespace db::report {
 
 struct Block {
-  enum class Kind { kParagraph, kTable, kFigure } kind = Kind::kParagraph;
+  enum class Kind { kParagraph, kTable, kFigure, kFacts } kind = Kind::kParagraph;
   std::string text;
+  std::vector<std::pair<std::string, std::string>> facts;  // term, value
   html::Table table;
   svg::Figure figure;
 };
@@ -29,6 +30,7 @@ struct Section {
   std::vector<Block> blocks;
   void paragraph(std::string text);
   void table(html::Table table);
+  void facts(std::vector<std::pair<std::string, std::string>> facts);
   // Adds the figure only if some series has a finite point (an empty
   // figure says nothing); returns whether it did.
   bool figure(svg::Figure figure);
@@ -54,6 +56,12 @@ void add_paper_figures(const ReportInput& input, const std::string& scope, Secti
 void add_beyond_tables(const ReportInput& input, Section& section);
 void add_beyond_figures(const ReportInput& input, Section& section);
 void add_comparison(const ReportInput& input, Section& section);
+// The run header (what was measured, with which camera, calibration,
+// geometry and bench or simulated rig) and the summary table: one row per
+// solver and scope, worst first against a baseline (report_summary.cpp).
+Section summary_section(const ReportInput& input);
+// The header's facts alone (term, value), for the page and report.json.
+std::vector<std::pair<std::string, std::string>> run_header(const RunStudy& study);
 
 // k of n as a fraction in [0, 1] (detection, failure, ambiguity and flip
 // rates); NaN when n is 0.
@@ -66,6 +74,10 @@ inline double fraction(std::size_t k, std::size_t n) {
 std::string num(double value, int digits = 6);
 // Colour of a solver in every figure (by its position in the sorted list).
 std::string colour_of(std::size_t index);
+// Marker shape of a solver in every figure (svg::Series::marker), by the same index.
+int marker_of(std::size_t index);
+// A solver's name with those that coincide with it ("ippe = opencv_ippe").
+std::string series_label(const RunStudy& study, const SolverStudy& s);
 
 std::string render_html(const Document& document);
 // report.json: the study's numbers, every figure's series and every table.

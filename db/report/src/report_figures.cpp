@@ -20,24 +20,45 @@ std::size_t solver_index(const RunStudy& study, const std::string& solver) {
   return static_cast<std::size_t>(std::find(names.begin(), names.end(), solver) - names.begin());
 }
 
+// A solver's own colour and marker, the same in every figure.
+svg::Series& solver_style(const RunStudy& study, const std::string& solver, svg::Series& s) {
+  const std::size_t index = solver_index(study, solver);
+  s.colour = colour_of(index);
+  s.marker = marker_of(index);
+  return s;
+}
+
 double centre(const DistanceClassStudy& c) {
   return 0.5 * (c.lower_m + c.upper_m);
 }
 
-svg::Series class_series(const SolverStudy& s, const ClassValue& value, const ClassValue& error,
+// The spread of a class's values (the band) and the confidence interval of
+// its mean (the error bars).
+struct ClassSpread {
+  ClassValue band, ci;
+};
+
+// Half-width of the 95 % confidence interval of a mean of n independent
+// values of standard deviation sd: t(0.975, n - 1) sd / sqrt(n); NaN for n < 2.
+double ci95(double sd, std::size_t n) {
+  if (n < 2 || !std::isfinite(sd)) return kNaN;
+  const double dn = static_cast<double>(n);
+  return stats::two_sided_threshold(0.05, dn - 1) * sd / std::sqrt(dn);
+}
+
+svg::Series class_series(const SolverStudy& s, const ClassValue& value, const ClassSpread& spread,
                          const std::string& label, const std::string& colour, bool dashed) {
   svg::Series out;
   out.label = label;
   out.style = svg::SeriesStyle::kLineAndMarkers;
   out.dashed = dashed;
   out.colour = colour;
+  auto finite = [](double v) { return std::isfinite(v) ? v : kNaN; };
   for (const DistanceClassStudy& c : s.classes) {
     out.x.push_back(centre(c));
     out.y.push_back(value(c));
-    if (error) {
-      const double e = error(c);
-      out.y_error.push_back(std::isfinite(e) ? e : kNaN);
-    }
+    if (spread.band) out.y_band.push_back(finite(spread.band(c)));
+    if (spread.ci) out.y_error.push_back(finite(spread.ci(c)));
   }
   return out;
 }
@@ -46,7 +67,7 @@ svg::Series class_series(const SolverStudy& s, const ClassValue& value, const Cl
 // baseline's, dashed).
 svg::Figure class_figure(const ReportInput& in, const std::string& scope, const std::string& id,
                          const std::string& title, svg::Axis y, const ClassValue& value,
-                         const ClassValue& error, const std::string& caption) {
+                         const ClassSpread& error, const std::string& caption) {
   svg::Figure f;
   f.id = id;
   f.title = title;
@@ -56,12 +77,15 @@ svg::Figure class_figure(const ReportInput& in, const std::string& scope, const 
   f.width_px = 760;
   f.height_px = 440;
   for (const SolverStudy& s : in.study.solvers) {
-    if (s.scope != scope || s.used == 0) continue;
+    if (s.scope != scope || s.used == 0 || !s.coincides_with.empty()) continue;
     const std::string colour = colour_of(solver_index(in.study, s.solver));
-    f.series.push_back(class_series(s, value, error, s.solver, colour, false));
+    const std::string label = series_label(in.study, s);
+    f.series.push_back(class_series(s, value, error, label, colour, false));
+    solver_style(in.study, s.solver, f.series.back());
     if (in.baseline) {
       if (const SolverStudy* b = in.baseline->find(s.solver, scope)) {
-        f.series.push_back(class_series(*b, value, error, s.solver + " (baseline)", colour, true));
+        f.series.push_back(class_series(*b, value, error, label + " (baseline)", colour, true));
+        solver_style(in.study, s.solver, f.series.back());
       }
     }
   }
@@ -82,11 +106,16 @@ svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
   f.width_px = 760;
   f.height_px = 520;
   for (const SolverStudy& s : in.study.solvers) {
-    if (s.scope != scope || !s.ols) continue;
+    if (s.scope != scope || !s.ols || !s.coincides_with.empty()) continue;
     const std::string colour = colour_of(solver_index(in.study, s.solver));
-    svg::Series points{s.solver, s.plot_true_m, s.plot_estimated_m, {}, svg::SeriesStyle::kMarkers,
-                       false,    colour};
-    f.series.push_back(points);
+    svg::Series points{series_label(in.study, s),
+                       s.plot_true_m,
+                       s.plot_estimated_m,
+                       {},
+                       svg::SeriesStyle::kMarkers,
+                       false,
+                       colour};
+    f.series.push_back(solver_style(in.study, s.solver, points));
     const auto [lo, hi] = std::minmax_element(s.plot_true_m.begin(), s.plot_true_m.end());
     auto line = [&](const stats::LineFit& fit, bool dashed, const std::string& label) {
       svg::Series l;
@@ -146,71 +175,112 @@ svg::Figure residual_figure(const ReportInput& in, const std::string& scope) {
     return out;
   };
   for (const SolverStudy& s : in.study.solvers) {
-    if (s.scope != scope || !s.ols) continue;
+    if (s.scope != scope || !s.ols || !s.coincides_with.empty()) continue;
     const std::string colour = colour_of(solver_index(in.study, s.solver));
-    f.series.push_back(series(s, s.solver, colour, false));
+    const std::string label = series_label(in.study, s);
+    f.series.push_back(series(s, label, colour, false));
+    solver_style(in.study, s.solver, f.series.back());
     if (in.baseline) {
       const SolverStudy* b = in.baseline->find(s.solver, scope);
-      if (b != nullptr && b->ols)
-        f.series.push_back(series(*b, s.solver + " (baseline)", colour, true));
+      if (b != nullptr && b->ols) {
+        f.series.push_back(series(*b, label + " (baseline)", colour, true));
+        solver_style(in.study, s.solver, f.series.back());
+      }
     }
   }
   return f;
+}
+
+// Variance over the Cramér-Rao bound per class, with the bound's corner
+// noise measured from the frames (ClassCornerNoise).
+void add_efficiency_figure(const ReportInput& in, const std::string& scope, Section& sec) {
+  svg::Figure f = class_figure(
+      in, scope, "efficiency-" + scope, "Efficiency per class (scope " + scope + ")",
+      {"variance / Cramér-Rao bound", "", true, std::nullopt, std::nullopt},
+      [](const DistanceClassStudy& c) { return c.efficiency; }, {},
+      "Frame-to-frame variance of the distance over sigma_corner² times the position's "
+      "Cramér-Rao distance bound² (1 = efficient, the grey dashed line). The bound assumes corner "
+      "errors independent between corners and coordinates with the sd sigma_corner measured "
+      "in the class (pooled frame-to-frame sd of the detected corners, table \"corner-noise\"). "
+      "A value below 1 cannot be an estimator beating the bound: it says the measured corner "
+      "errors are not independent (e.g. corners that share a fitted edge have correlated "
+      "errors, so the solvers average less noise than sigma_corner suggests); read such "
+      "values as relative between solvers only.");
+  svg::Series bound;
+  bound.label = "Cramér-Rao bound";
+  bound.style = svg::SeriesStyle::kLine;
+  bound.colour = "#777777";
+  bound.dashed = true;
+  bound.x = {0.10, 1.00};
+  bound.y = {1.0, 1.0};
+  f.series.push_back(bound);
+  sec.figure(std::move(f));
 }
 
 }  // namespace
 
 void add_paper_figures(const ReportInput& in, const std::string& scope, Section& sec) {
   const std::string where = " (scope " + scope + ")";
+  // Image errors: the band is the frames' sd; the mean's interval uses the
+  // class's positions as the independent draws (frames of one position share
+  // its pose), with the frames' sd, which is at least the sd of the
+  // positions' means: a conservative interval.
+  const ClassSpread reprojection{
+      [](const DistanceClassStudy& c) { return c.reprojection_px.sd; },
+      [](const DistanceClassStudy& c) { return ci95(c.reprojection_px.sd, c.positions); }};
+  const ClassSpread generalization{
+      [](const DistanceClassStudy& c) { return c.generalization_px.sd; },
+      [](const DistanceClassStudy& c) { return ci95(c.generalization_px.sd, c.positions); }};
+  // Distance error: the band is the frames' sd; the mean's interval is that
+  // of the mean over positions of their mean error (bias_sd over positions).
+  const ClassSpread distance{
+      [](const DistanceClassStudy& c) { return c.error_m.sd; },
+      [](const DistanceClassStudy& c) { return ci95(c.bias_sd_m, c.positions); }};
+  const std::string bands =
+      " Shaded band: ± 1 sd of the estimates; error bars: 95 % confidence interval of the mean "
+      "(Student's t over the class's positions, the independent draws).";
   sec.figure(class_figure(
       in, scope, "fig8-" + scope, "Reconstruction error against distance" + where,
       {"reprojection error", "px", false, std::nullopt, std::nullopt},
-      [](const DistanceClassStudy& c) { return c.reprojection_px.mean; },
-      [](const DistanceClassStudy& c) { return c.reprojection_px.sd; },
-      "Mean RMS reprojection error per distance class, bars ± 1 sd (paper Fig. 8)."));
+      [](const DistanceClassStudy& c) { return c.reprojection_px.mean; }, reprojection,
+      "Mean RMS reprojection error per distance class (paper Fig. 8)." + bands));
   if (scope != "target") {
     sec.figure(class_figure(
         in, scope, "fig9-" + scope, "Generalization error against distance" + where,
         {"generalization error", "px", false, std::nullopt, std::nullopt},
-        [](const DistanceClassStudy& c) { return c.generalization_px.mean; },
-        [](const DistanceClassStudy& c) { return c.generalization_px.sd; },
+        [](const DistanceClassStudy& c) { return c.generalization_px.mean; }, generalization,
         "Mean RMS reprojection error of the other markers' corners with the pose marker's "
-        "pose, bars ± 1 sd (paper Fig. 9)."));
+        "pose (paper Fig. 9)." +
+            bands));
   }
   sec.figure(class_figure(
       in, scope, "fig11-mean-" + scope, "Mean distance error per class" + where,
       {"estimated - true distance", "m", false, std::nullopt, std::nullopt},
-      [](const DistanceClassStudy& c) { return c.error_m.mean; },
-      [](const DistanceClassStudy& c) { return c.error_m.sd; },
-      "Mean distance error in the ten distance classes, bars ± 1 sd (paper Fig. 11)."));
+      [](const DistanceClassStudy& c) { return c.error_m.mean; }, distance,
+      "Mean distance error in the ten distance classes (paper Fig. 11)." + bands));
   sec.figure(class_figure(
       in, scope, "fig11-variance-" + scope, "Variance of the distance error per class" + where,
       {"variance of the distance error", "m²", true, std::nullopt, std::nullopt},
-      [](const DistanceClassStudy& c) { return c.error_m.variance; }, nullptr,
+      [](const DistanceClassStudy& c) { return c.error_m.variance; }, {},
       "Variance of the distance error in the ten distance classes (paper Fig. 11), log scale."));
   sec.figure(fit_figure(in, scope));
   sec.figure(residual_figure(in, scope));
   sec.figure(class_figure(
       in, scope, "jitter-" + scope, "Jitter per class" + where,
       {"jitter (sd over the frames of a position)", "m", true, std::nullopt, std::nullopt},
-      [](const DistanceClassStudy& c) { return c.jitter_m; }, nullptr,
+      [](const DistanceClassStudy& c) { return c.jitter_m; }, {},
       "Pooled standard deviation of the distance over the frames of one position: the "
       "noise part of the error, to compare with the bias below."));
   sec.figure(class_figure(
       in, scope, "bias-" + scope, "Bias per class" + where,
       {"bias (mean over positions of their mean error)", "m", false, std::nullopt, std::nullopt},
       [](const DistanceClassStudy& c) { return c.bias_m; },
-      [](const DistanceClassStudy& c) { return c.bias_sd_m; },
-      "Mean over positions of (position's mean estimate - true distance), bars ± 1 sd over "
-      "positions: the systematic part of the error."));
-  sec.figure(class_figure(
-      in, scope, "efficiency-" + scope, "Efficiency per class" + where,
-      {"variance / Cramér-Rao bound", "", true, std::nullopt, std::nullopt},
-      [](const DistanceClassStudy& c) { return c.efficiency; }, nullptr,
-      "Frame-to-frame variance of the distance over sigma_corner² times the position's "
-      "Cramér-Rao distance bound² (1 = efficient). sigma_corner: pooled frame-to-frame sd of "
-      "the detected corners in the class. Below 1 the corner noise is not the independent, "
-      "isotropic noise the bound assumes (e.g. correlated between corners)."));
+      {[](const DistanceClassStudy& c) { return c.bias_sd_m; },
+       [](const DistanceClassStudy& c) { return ci95(c.bias_sd_m, c.positions); }},
+      "Mean over positions of (position's mean estimate - true distance): the systematic part "
+      "of the error. Shaded band: ± 1 sd over positions; error bars: its 95 % confidence "
+      "interval."));
+  add_efficiency_figure(in, scope, sec);
 }
 
 namespace {
@@ -265,12 +335,16 @@ void add_rate_figures(const ReportInput& in, Section& sec) {
         const SolverStudy* b = in.baseline ? in.baseline->find(s.solver, s.scope) : nullptr;
         const std::size_t baseline_events = b == nullptr ? 0 : ambiguity ? b->ambiguous : b->flips;
         if (events == 0 && baseline_events == 0) continue;
+        if (!s.coincides_with.empty()) continue;
         const std::string colour = colour_of(solver_index(st, s.solver));
-        const std::string label = s.solver + (ambiguity ? " (" + s.scope + ")" : "");
+        const std::string label = series_label(st, s) + (ambiguity ? " (" + s.scope + ")" : "");
         f.series.push_back(rate_series(s, ambiguity, by_angle, label, colour, false));
-        if (b != nullptr)
+        solver_style(st, s.solver, f.series.back());
+        if (b != nullptr) {
           f.series.push_back(
               rate_series(*b, ambiguity, by_angle, label + " (baseline)", colour, true));
+          solver_style(st, s.solver, f.series.back());
+        }
       }
       sec.figure(std::move(f));
     }

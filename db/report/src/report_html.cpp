@@ -1,7 +1,15 @@
 // report.html: the document through db::html (self-contained, SVG inline).
 #include "report_document.hpp"
+#include "report_units.hpp"
 
 namespace db::report {
+namespace {
+
+// Tables longer than this are folded under their caption: a screenful of
+// rows, so the page reads as summary, figures and short tables first.
+constexpr std::size_t kFoldedFromRows = 20;
+
+}  // namespace
 
 std::string render_html(const Document& document) {
   html::Page page(document.title);
@@ -18,8 +26,14 @@ std::string render_html(const Document& document) {
         case Block::Kind::kParagraph:
           page.paragraph(b.text);
           break;
-        case Block::Kind::kTable:
-          page.table(b.table);
+        case Block::Kind::kTable: {
+          html::Table table = display_table(b.table);
+          table.folded = table.id != "summary" && table.rows.size() > kFoldedFromRows;
+          page.table(table);
+          break;
+        }
+        case Block::Kind::kFacts:
+          page.facts(b.facts);
           break;
         case Block::Kind::kFigure:
           page.figure(b.figure);

@@ -16,6 +16,26 @@ json to_json(const stats::Summary& s) {
           {"sd", s.sd},       {"min", s.min},   {"max", s.max}};
 }
 
+json camera_json(const store::Run& run) {
+  if (!run.camera) return nullptr;
+  const store::RunCamera& c = *run.camera;
+  return {{"source", c.source}, {"device_id", c.device_id}, {"vendor", c.vendor},
+          {"model", c.model},   {"serial", c.serial},       {"device_version", c.device_version}};
+}
+
+json files_json(const store::RunDescription& d) {
+  json files = json::object();
+  auto file = [&](const char* role, const store::StoredFile& f) {
+    files[role] = {{"path", f.path}, {"sha256", f.sha256}};
+  };
+  file("sweep_file", d.sweep_file);
+  file("camera_calibration", d.camera_calibration);
+  file("target_layout", d.target_layout);
+  file("rig_geometry", d.rig_geometry);
+  file("bench_profile", d.bench_profile);
+  return files;
+}
+
 json to_json(const SolverStudy& s) {
   json j{{"solver", s.solver},
          {"scope", s.scope},
@@ -31,6 +51,9 @@ json to_json(const SolverStudy& s) {
          {"relative_error_pct", to_json(s.relative_error_pct)},
          {"time_us", to_json(s.time_us)},
          {"position_abs_error_m", to_json(s.position_abs_error_m)},
+         {"abs_error_p95_m", s.abs_error_p95_m},
+         {"abs_error_ci95_m", s.abs_error_ci95_m},
+         {"coincides_with", s.coincides_with},
          {"position_reprojection_px", to_json(s.position_reprojection_px)},
          {"position_generalization_px", to_json(s.position_generalization_px)},
          {"ambiguity_checked", s.ambiguity_checked},
@@ -102,6 +125,14 @@ json to_json(const RunStudy& st) {
                      {"detected", m.detected},
                      {"edge_fit_residual_px", to_json(m.edge_fit_residual_px)},
                      {"corner_jitter_px", m.corner_jitter_px}});
+  json missed = json::array();
+  for (const MissedMarker& m : st.missed_markers)
+    missed.push_back({{"plan_index", m.plan_index},
+                      {"marker_id", m.marker_id},
+                      {"side_px", m.side_px},
+                      {"true_distance_m", m.true_distance_m},
+                      {"frames", m.frames},
+                      {"frames_detected", m.frames_detected}});
   json stages = json::array();
   for (const StageStudy& s : st.stages)
     stages.push_back({{"stage", s.stage},
@@ -123,7 +154,9 @@ json to_json(const RunStudy& st) {
             {"ended_at", st.run.ended_at ? json(*st.run.ended_at) : json(nullptr)},
             {"plan_size", st.run.description.plan_size},
             {"software_version", st.run.description.software_version},
-            {"host", st.run.description.host}}},
+            {"host", st.run.description.host},
+            {"camera", camera_json(st.run)},
+            {"files", files_json(st.run.description)}}},
           {"positions", st.positions},
           {"failed_positions", st.failed_positions},
           {"positions_outside_classes", st.positions_outside_classes},
@@ -137,6 +170,7 @@ json to_json(const RunStudy& st) {
           {"solvers", solvers},
           {"corner_noise", corner},
           {"marker_sizes", sizes},
+          {"missed_markers", missed},
           {"stages", stages},
           {"events", events}};
 }
@@ -210,6 +244,10 @@ std::string render_json(const Document& document, const ReportInput& in) {
       }
     }
   }
+  json header = json::array();
+  for (const auto& [term, value] : run_header(in.study))
+    header.push_back({term, value});
+  root["header"] = header;
   root["figures"] = figures;
   root["tables"] = tables;
   return root.dump(1);

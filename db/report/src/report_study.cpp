@@ -204,6 +204,23 @@ void add_used_estimate(const EstimateSample& e, double truth,
   }
 }
 
+// 95th percentile of |estimated - true| over the used estimates; NaN if none.
+double abs_error_p95(const std::vector<double>& truth, const std::vector<double>& estimated) {
+  if (truth.empty()) return kNaN;
+  std::vector<double> abs_error(truth.size());
+  for (std::size_t i = 0; i < truth.size(); ++i)
+    abs_error[i] = std::fabs(estimated[i] - truth[i]);
+  return stats::quantile(std::move(abs_error), 0.95);
+}
+
+// Half-width of the 95 % confidence interval of a mean over independent
+// values: t(0.975, n - 1) * sd / sqrt(n); NaN below two values.
+double mean_ci95(const stats::Summary& s) {
+  if (s.count < 2 || !std::isfinite(s.sd)) return kNaN;
+  const double n = static_cast<double>(s.count);
+  return stats::two_sided_threshold(0.05, n - 1) * s.sd / std::sqrt(n);
+}
+
 // Every estimate of the solver and scope: skipped, failed and used counts,
 // times, ambiguity, and the used estimates' accumulators.
 void add_estimates(const RunData& data, const SolverScopeData& rows, const PositionClasses& classes,
@@ -332,6 +349,8 @@ SolverStudy study_solver(const RunData& data, const SolverScopeData& rows,
   s.relative_error_pct = acc.relative.summary();
   s.time_us = acc.time.summary();
   s.position_abs_error_m = acc.position_abs.summary();
+  s.abs_error_p95_m = abs_error_p95(acc.x, acc.y);
+  s.abs_error_ci95_m = mean_ci95(s.position_abs_error_m);
   s.position_reprojection_px = acc.position_reprojection.summary();
   s.position_generalization_px = acc.position_generalization.summary();
   fit_lines(acc.x, acc.y, acc.jitter.sd(), options, s);
@@ -440,6 +459,21 @@ std::vector<MarkerSizeClass> study_marker_sizes(const RunData& data, bool visibl
   return out;
 }
 
+std::vector<MissedMarker> study_missed_markers(const RunData& data) {
+  std::vector<MissedMarker> out;
+  for (const PositionData& p : data.positions) {
+    if (p.frames == 0) continue;
+    for (const store::VisibleMarker& v : p.record.visible_markers) {
+      const MarkerAtPosition* m = detected_marker(p, v.marker_id);
+      const std::size_t detected = m ? std::min(m->frames_detected, p.frames) : 0;
+      if (detected >= p.frames) continue;
+      out.push_back({p.record.plan_index, v.marker_id, v.side_px,
+                     p.record.true_distance_m.value_or(kNaN), p.frames, detected});
+    }
+  }
+  return out;
+}
+
 // The run's counts of positions and frames and what its positions recorded.
 void count_positions(const RunData& data, RunStudy& study) {
   study.positions = data.positions.size();
@@ -457,7 +491,41 @@ void count_positions(const RunData& data, RunStudy& study) {
   }
 }
 
+// Whether two studies of one scope measured the same poses: the same used
+// estimates at the same positions, mean |error| within `tolerance` at each.
+bool results_coincide(const SolverStudy& a, const SolverStudy& b, double tolerance) {
+  if (a.scope != b.scope || a.used == 0 || a.used != b.used ||
+      a.per_position.size() != b.per_position.size())
+    return false;
+  for (std::size_t i = 0; i < a.per_position.size(); ++i) {
+    const PositionMeans& p = a.per_position[i];
+    const PositionMeans& q = b.per_position[i];
+    if (p.plan_index != q.plan_index || !(std::fabs(p.abs_error_m - q.abs_error_m) <= tolerance))
+      return false;
+  }
+  return true;
+}
+
+void mark_coinciding(std::vector<SolverStudy>& solvers, double tolerance) {
+  for (std::size_t i = 0; i < solvers.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (solvers[j].coincides_with.empty() &&
+          results_coincide(solvers[j], solvers[i], tolerance)) {
+        solvers[i].coincides_with = solvers[j].solver;
+        break;
+      }
+    }
+  }
+}
+
 }  // namespace
+
+std::vector<std::string> RunStudy::coinciding(const SolverStudy& s) const {
+  std::vector<std::string> out;
+  for (const SolverStudy& other : solvers)
+    if (other.scope == s.scope && other.coincides_with == s.solver) out.push_back(other.solver);
+  return out;
+}
 
 RunStudy compute_study(const RunData& data, const ReportOptions& options) {
   RunStudy study;
@@ -471,10 +539,12 @@ RunStudy compute_study(const RunData& data, const ReportOptions& options) {
     study.estimates += rows.samples.size();
     study.solvers.push_back(study_solver(data, rows, study.corner_noise, options));
   }
+  mark_coinciding(study.solvers, options.coincidence_m);
   study.stages = study_stages(data);
   study.nonfinite_detections = data.nonfinite_detections;
   study.marker_sizes =
       study_marker_sizes(data, study.visible_markers_recorded, study.nonfinite_visible_markers);
+  study.missed_markers = study_missed_markers(data);
   return study;
 }
 

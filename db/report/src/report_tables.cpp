@@ -1,7 +1,11 @@
 // The tables of the report: the paper's Tables 2-6 with the paper's values
 // beside ours, and the tables of the statistics beyond the paper.
+#include <algorithm>
+#include <cmath>
+
 #include "report_data.hpp"
 #include "report_document.hpp"
+#include "report_units.hpp"
 
 namespace db::report {
 namespace {
@@ -9,9 +13,15 @@ namespace {
 html::Cell text(const std::string& t, const std::string& css = "") {
   return {t, css, ""};
 }
-html::Cell number(double v, const std::string& css = "num") {
-  return {num(v), css, ""};
+// A number in SI (or the unit `q` names); the page shows it converted
+// (report_units.hpp), JSON and CSV as it is.
+html::Cell number(double v, Quantity q = Quantity::kPlain, const std::string& css = "num") {
+  return quantity_cell(v, q, css);
 }
+constexpr Quantity kM = Quantity::kLength, kM2 = Quantity::kArea, kS = Quantity::kDuration,
+                   kUs = Quantity::kMicroseconds, kPx = Quantity::kPixels,
+                   kPx2 = Quantity::kPixelsSq, kPct = Quantity::kPercent,
+                   kRate = Quantity::kFraction;
 html::Cell count(std::size_t n) {
   return {std::to_string(n), "num", ""};
 }
@@ -73,11 +83,12 @@ void add_image_error_table(const ReportInput& in, const std::string& scope, Sect
       in, scope, t,
       [&](const SolverStudy& s, std::vector<html::Cell>& r) {
         const stats::Summary& e = s.*ours;
-        r.insert(r.end(), {count(e.count), number(e.mean), number(e.variance), number(e.sd)});
+        r.insert(r.end(), {count(e.count), number(e.mean, kPx), number(e.variance, kPx2),
+                           number(e.sd, kPx)});
       },
       [&](const PaperValues& p, std::vector<html::Cell>& r) {
-        r.insert(r.end(), {text("1400"), number(p.*paper_mean), number(p.*paper_variance),
-                           number(p.*paper_sd)});
+        r.insert(r.end(), {text("1400"), number(p.*paper_mean, kPx),
+                           number(p.*paper_variance, kPx2), number(p.*paper_sd, kPx)});
       });
   sec.table(std::move(t));
 }
@@ -98,18 +109,18 @@ void add_regression_table(const ReportInput& in, const std::string& scope, Secti
         r.push_back(count(s.ols ? s.ols->n : 0));
         r.push_back(number(s.ols ? s.ols->slope : nan));
         r.push_back(number(s.ols ? s.ols->slope_se : nan));
-        r.push_back(number(s.ols ? s.ols->intercept : nan));
-        r.push_back(number(s.ols ? s.ols->intercept_se : nan));
+        r.push_back(number(s.ols ? s.ols->intercept : nan, kM));
+        r.push_back(number(s.ols ? s.ols->intercept_se : nan, kM));
         r.push_back(number(s.deming ? s.deming->slope : nan));
         r.push_back(number(s.deming ? s.deming->slope_se : nan));
-        r.push_back(number(s.deming ? s.deming->intercept : nan));
-        r.push_back(number(s.deming ? s.deming->intercept_se : nan));
+        r.push_back(number(s.deming ? s.deming->intercept : nan, kM));
+        r.push_back(number(s.deming ? s.deming->intercept_se : nan, kM));
         r.push_back(number(s.deming ? s.deming_delta : nan));
       },
       [](const PaperValues& p, std::vector<html::Cell>& r) {
-        r.insert(r.end(), {text("1939"), number(p.slope), number(p.slope_se), number(p.intercept_m),
-                           number(p.intercept_se_m), text("n/a"), text("n/a"), text("n/a"),
-                           text("n/a"), text("n/a")});
+        r.insert(r.end(), {text("1939"), number(p.slope), number(p.slope_se),
+                           number(p.intercept_m, kM), number(p.intercept_se_m, kM), text("n/a"),
+                           text("n/a"), text("n/a"), text("n/a"), text("n/a")});
       });
   sec.table(std::move(t));
 }
@@ -125,12 +136,13 @@ void add_residual_table(const ReportInput& in, const std::string& scope, Section
   solver_rows(
       in, scope, t,
       [](const SolverStudy& s, std::vector<html::Cell>& r) {
-        r.push_back(number(s.ols ? s.ols->residual_sd : kNaN));
-        r.push_back(number(s.ols ? s.ols->residual_variance : kNaN));
-        r.push_back(number(s.ols ? s.ols->residual_rms : kNaN));
+        r.push_back(number(s.ols ? s.ols->residual_sd : kNaN, kM));
+        r.push_back(number(s.ols ? s.ols->residual_variance : kNaN, kM2));
+        r.push_back(number(s.ols ? s.ols->residual_rms : kNaN, kM));
       },
       [](const PaperValues& p, std::vector<html::Cell>& r) {
-        r.insert(r.end(), {number(p.residual_rms_m), number(p.residual_variance), text("n/a")});
+        r.insert(r.end(),
+                 {number(p.residual_rms_m, kM), number(p.residual_variance, kM2), text("n/a")});
       });
   sec.table(std::move(t));
 }
@@ -149,15 +161,15 @@ void add_distance_table(const ReportInput& in, const std::string& scope, Section
   solver_rows(
       in, scope, t,
       [](const SolverStudy& s, std::vector<html::Cell>& r) {
-        r.insert(r.end(), {count(s.error_m.count), number(s.error_m.mean),
-                           number(s.error_m.variance), number(s.error_m.sd),
-                           number(s.abs_error_m.mean), number(s.relative_error_pct.mean),
-                           number(s.time_us.mean), number(s.time_us.sd), text("")});
+        r.insert(r.end(), {count(s.error_m.count), number(s.error_m.mean, kM),
+                           number(s.error_m.variance, kM2), number(s.error_m.sd, kM),
+                           number(s.abs_error_m.mean, kM), number(s.relative_error_pct.mean, kPct),
+                           number(s.time_us.mean, kUs), number(s.time_us.sd, kUs), text("")});
       },
       [](const PaperValues& p, std::vector<html::Cell>& r) {
-        r.insert(r.end(), {text("1939"), number(p.mean_error_m), number(p.error_variance),
-                           number(p.error_sd_m), text("n/a"), text("n/a"), number(p.time_us),
-                           text("n/a"), number(p.time_per_pose_us)});
+        r.insert(r.end(), {text("1939"), number(p.mean_error_m, kM), number(p.error_variance, kM2),
+                           number(p.error_sd_m, kM), text("n/a"), text("n/a"),
+                           number(p.time_us, kUs), text("n/a"), number(p.time_per_pose_us, kUs)});
       });
   sec.table(std::move(t));
 }
@@ -178,10 +190,11 @@ void add_class_table(const ReportInput& in, const std::string& scope, Section& s
     if (s.scope != scope) continue;
     for (const DistanceClassStudy& c : s.classes) {
       t.rows.push_back({text(s.solver), text(class_range(c.lower_m, c.upper_m, 3)),
-                        count(c.error_m.count), number(c.error_m.mean), number(c.error_m.variance),
-                        number(c.error_m.sd), number(c.reprojection_px.mean),
-                        number(c.generalization_px.mean), count(c.positions), number(c.jitter_m),
-                        number(c.bias_m), number(c.bias_sd_m), number(c.efficiency)});
+                        count(c.error_m.count), number(c.error_m.mean, kM),
+                        number(c.error_m.variance, kM2), number(c.error_m.sd, kM),
+                        number(c.reprojection_px.mean, kPx), number(c.generalization_px.mean, kPx),
+                        count(c.positions), number(c.jitter_m, kM), number(c.bias_m, kM),
+                        number(c.bias_sd_m, kM), number(c.efficiency)});
     }
   }
   sec.table(std::move(t));
@@ -201,7 +214,7 @@ void add_convergence_table(const ReportInput& in, Section& sec) {
         reasons += (reasons.empty() ? "" : "; ") + why + " " + std::to_string(n);
       t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->estimates),
                         count(s->skipped), count(s->failed),
-                        number(fraction(s->failed, s->estimates - s->skipped)),
+                        number(fraction(s->failed, s->estimates - s->skipped), kRate),
                         text(reasons.empty() ? "-" : reasons)});
     }
   }
@@ -224,9 +237,10 @@ void add_ambiguity_table(const ReportInput& in, Section& sec) {
     if (c.ambiguity_checked == 0 && c.flip_checked == 0) continue;
     for (const auto& [s, source] : with_baseline(in, c)) {
       t.rows.push_back({text(s->solver), text(s->scope), text(source), count(s->ambiguity_checked),
-                        count(s->ambiguous), number(fraction(s->ambiguous, s->ambiguity_checked)),
+                        count(s->ambiguous),
+                        number(fraction(s->ambiguous, s->ambiguity_checked), kRate),
                         count(s->flip_checked), count(s->flips),
-                        number(fraction(s->flips, s->flip_checked))});
+                        number(fraction(s->flips, s->flip_checked), kRate)});
     }
   }
   sec.table(std::move(t));
@@ -241,7 +255,7 @@ void add_corner_noise_table(const RunStudy& st, Section& sec) {
                 {}};
   for (const ClassCornerNoise& c : st.corner_noise) {
     t.rows.push_back(
-        {text(class_range(c.lower_m, c.upper_m, 3)), number(c.sigma_px), count(c.dof)});
+        {text(class_range(c.lower_m, c.upper_m, 3)), number(c.sigma_px, kPx), count(c.dof)});
   }
   sec.table(std::move(t));
 }
@@ -259,10 +273,47 @@ void add_detection_table(const RunStudy& st, Section& sec) {
       {}};
   for (const MarkerSizeClass& m : st.marker_sizes) {
     t.rows.push_back({text(class_range(m.lower_px, m.upper_px, 4)), count(m.expected),
-                      count(m.detected), number(fraction(m.detected, m.expected)),
-                      number(m.edge_fit_residual_px.mean), number(m.corner_jitter_px)});
+                      count(m.detected), number(fraction(m.detected, m.expected), kRate),
+                      number(m.edge_fit_residual_px.mean, kPx), number(m.corner_jitter_px, kPx)});
   }
   sec.table(std::move(t));
+}
+
+// What the misses behind the detection rate are: systematic (every frame
+// of a position) or random, and where the systematic ones are.
+void add_missed_markers(const RunStudy& st, Section& sec) {
+  if (!st.visible_markers_recorded) return;
+  if (st.missed_markers.empty()) {
+    sec.paragraph("Every visible marker was detected in every frame of its position.");
+    return;
+  }
+  std::size_t systematic = 0;
+  std::string where;
+  for (const MissedMarker& m : st.missed_markers) {
+    if (m.frames_detected != 0) continue;
+    ++systematic;
+    if (systematic <= 12)
+      where += (where.empty() ? "" : "; ") + std::string("marker ") + std::to_string(m.marker_id) +
+               " at plan index " + std::to_string(m.plan_index) + " (" +
+               fixed(m.true_distance_m, DisplayUnit{1e3, 1, "mm"}) + " mm, side " +
+               fixed(m.side_px, DisplayUnit{1, 1, "px"}) + " px)";
+  }
+  std::string text = "Why the detection rate dips: " + std::to_string(st.missed_markers.size()) +
+                     " (visible marker, position) pairs were missed in some frame; " +
+                     std::to_string(systematic) +
+                     " of them in every frame of their position (the marker could not be "
+                     "detected there at all), the others in some frames only (random misses).";
+  if (systematic > 0) {
+    text += " Missed in every frame: " + where + (systematic > 12 ? "; ..." : "") +
+            ". A marker counts as visible when its four corners project inside the image at the "
+            "true pose; the detector also reads an intensity profile across each side and rejects "
+            "a side whose profile leaves the image (DetectorStats::cut_by_image_border). At the "
+            "closest positions, where every marker is large, the markers away from the pose "
+            "marker can reach the image border: misses in every frame at the smallest distances "
+            "are this field-of-view effect, not a failure to detect markers of that size, and "
+            "make the rate of the largest size classes dip.";
+  }
+  sec.paragraph(text);
 }
 
 void add_stage_table(const ReportInput& in, Section& sec) {
@@ -273,9 +324,10 @@ void add_stage_table(const ReportInput& in, Section& sec) {
       {}};
   auto rows = [&](const RunStudy& run, const std::string& source) {
     for (const StageStudy& s : run.stages) {
-      t.rows.push_back({text(s.stage), text(source), count(s.seconds.count), number(s.seconds.mean),
-                        number(s.seconds.sd), number(s.median_s), number(s.p95_s),
-                        number(s.seconds.mean * static_cast<double>(s.seconds.count))});
+      t.rows.push_back({text(s.stage), text(source), count(s.seconds.count),
+                        number(s.seconds.mean, kS), number(s.seconds.sd, kS),
+                        number(s.median_s, kS), number(s.p95_s, kS),
+                        number(s.seconds.mean * static_cast<double>(s.seconds.count), kS)});
     }
   };
   rows(in.study, "this run");
@@ -322,6 +374,7 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
   add_ambiguity_table(in, sec);
   add_corner_noise_table(in.study, sec);
   add_detection_table(in.study, sec);
+  add_missed_markers(in.study, sec);
   add_stage_table(in, sec);
   add_event_table(in.study, sec);
 }
@@ -371,9 +424,17 @@ void add_comparison(const ReportInput& in, Section& sec) {
                                                                         : "changed")
                                                            : "no significant change";
     const std::string css = f.worse ? "worse" : f.better ? "better" : "";
-    t.rows.push_back({text(f.solver), text(f.scope), text(f.figure), number(f.candidate),
-                      number(f.baseline), number(f.difference.difference),
-                      number(f.difference.standard_error), number(f.difference.z),
+    // Each row has its own unit: lengths in mm or µm by the row's values.
+    const bool length = f.figure.find("(m)") != std::string::npos;
+    const DisplayUnit u = display_unit(length ? kM : Quantity::kPlain,
+                                       std::max({std::fabs(f.candidate), std::fabs(f.baseline),
+                                                 std::fabs(f.difference.difference)}));
+    std::string figure = f.figure;
+    if (length) figure.replace(figure.find("(m)"), 3, "(" + u.symbol + ")");
+    auto value = [&](double v) { return text(fixed(v, u), "num"); };
+    t.rows.push_back({text(f.solver), text(f.scope), text(figure), value(f.candidate),
+                      value(f.baseline), value(f.difference.difference),
+                      value(f.difference.standard_error), number(f.difference.z),
                       text(verdict, css)});
   }
   sec.table(std::move(t));

@@ -10,10 +10,13 @@
 
 namespace db::report::svg::detail {
 
-// Okabe & Ito (2008), "Color Universal Design": distinguishable with every
-// common colour-vision deficiency. Yellow (#F0E442) last: faint on white.
-inline constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
-                                           "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+// Ten colours for ten solvers: Okabe & Ito (2008), "Color Universal
+// Design", distinguishable with every common colour-vision deficiency, and
+// two of Paul Tol's muted scheme (wine #882255, olive #999933) that stay
+// apart from them under the same deficiencies. Yellow (#F0E442) last: faint
+// on white.
+inline constexpr const char* kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00",
+                                           "#56B4E9", "#000000", "#882255", "#999933", "#F0E442"};
 inline constexpr int kPaletteSize = sizeof kPalette / sizeof kPalette[0];
 
 // Type sizes (px) and the width estimate of one character: 0.6 em covers

@@ -61,6 +61,16 @@ void validate(const Figure& f) {
                                   std::to_string(s.y_error.size()) + " y_error values for " +
                                   std::to_string(s.y.size()) + " points (expected 0 or " +
                                   std::to_string(s.y.size()) + ")");
+    if (!s.y_band.empty() && s.y_band.size() != s.y.size())
+      throw std::invalid_argument("render_svg: " + series_name(f, i) + " has " +
+                                  std::to_string(s.y_band.size()) + " y_band values for " +
+                                  std::to_string(s.y.size()) + " points (expected 0 or " +
+                                  std::to_string(s.y.size()) + ")");
+    for (size_t k = 0; k < s.y_band.size(); ++k)
+      if (s.y_band[k] < 0)
+        throw std::invalid_argument("render_svg: " + series_name(f, i) + " y_band[" +
+                                    std::to_string(k) + "] = " + number(s.y_band[k]) +
+                                    " is negative (expected a half-width >= 0)");
     for (size_t k = 0; k < s.y_error.size(); ++k)
       if (s.y_error[k] < 0)
         throw std::invalid_argument("render_svg: " + series_name(f, i) + " y_error[" +
@@ -114,8 +124,9 @@ Extent data_extent(const Figure& f, bool is_x) {
         continue;
       }
       e.add(axis_coord(axis, s.y[k]));
-      const double err = s.y_error.empty() ? NAN : s.y_error[k];
-      if (std::isfinite(err)) {
+      for (const double err :
+           {s.y_error.empty() ? NAN : s.y_error[k], s.y_band.empty() ? NAN : s.y_band[k]}) {
+        if (!std::isfinite(err)) continue;
         e.add(axis_coord(axis, s.y[k] + err));
         if (!axis.log || s.y[k] - err > 0) e.add(axis_coord(axis, s.y[k] - err));
       }

@@ -16,7 +16,9 @@ namespace {
 
 using namespace detail;
 
-constexpr int kShapeCount = 6;  // circle, square, triangle up, diamond, triangle down, open circle
+// circle, square, triangle up, diamond, triangle down, open circle, open
+// square, cross, plus, open diamond
+constexpr int kShapeCount = 10;
 
 std::string attr(const char* name, const std::string& value) {
   return std::string(" ") + name + "=\"" + value + "\"";
@@ -29,6 +31,9 @@ std::string marker(int shape, double cx, double cy, const std::string& colour, c
   const std::string klass = cls[0] ? attr("class", cls) : "";
   const std::string at = "M" + px(cx) + "," + px(cy);
   const std::string paint = attr("fill", c) + attr("stroke", c);
+  const std::string open =
+      attr("fill", "#ffffff") + attr("stroke", c) + attr("stroke-width", "1.5");
+  const std::string line = attr("fill", "none") + attr("stroke", c) + attr("stroke-width", "1.8");
   switch (shape % kShapeCount) {
     case 0:
       return "<circle" + klass + attr("cx", px(cx)) + attr("cy", px(cy)) +
@@ -42,11 +47,23 @@ std::string marker(int shape, double cx, double cy, const std::string& colour, c
              "/>";
     case 4:
       return "<path" + klass + attr("d", at + " m0,4.4 l3.9,-6.6 h-7.8 z") + paint + "/>";
-    default:
+    case 5:
       return "<circle" + klass + attr("cx", px(cx)) + attr("cy", px(cy)) +
-             attr("r", px(kMarkerRadius)) + attr("fill", "#ffffff") + attr("stroke", c) +
-             attr("stroke-width", "1.5") + "/>";
+             attr("r", px(kMarkerRadius)) + open + "/>";
+    case 6:
+      return "<path" + klass + attr("d", at + " m-3.2,-3.2 h6.4 v6.4 h-6.4 z") + open + "/>";
+    case 7:
+      return "<path" + klass + attr("d", at + " m-3.5,-3.5 l7,7 m0,-7 l-7,7") + line + "/>";
+    case 8:
+      return "<path" + klass + attr("d", at + " m-4.2,0 h8.4 m-4.2,-4.2 v8.4") + line + "/>";
+    default:
+      return "<path" + klass + attr("d", at + " m0,-4.6 l4.6,4.6 l-4.6,4.6 l-4.6,-4.6 z") + open +
+             "/>";
   }
+}
+
+int shape_of(const Series& s, size_t index) {
+  return s.marker >= 0 ? s.marker : static_cast<int>(index);
 }
 
 bool has_line(SeriesStyle s) {
@@ -86,6 +103,38 @@ BarSlots bar_slots(const Figure& f, const Layout& L) {
   }
   b.slot_px = std::min(0.8 * gap, 0.5 * L.plot_width);
   return b;
+}
+
+// The shaded band of a series (Series::y_band): one closed path per run of
+// consecutive drawn points with a finite half-width.
+std::string band_path(const Figure& f, const Layout& L, const Series& s) {
+  std::string d;
+  std::vector<std::pair<double, double>> upper, lower;
+  auto flush = [&]() {
+    if (upper.size() >= 2) {
+      d += (d.empty() ? "M" : " M") + px(upper[0].first) + "," + px(upper[0].second);
+      for (size_t k = 1; k < upper.size(); ++k)
+        d += " L" + px(upper[k].first) + "," + px(upper[k].second);
+      for (size_t k = lower.size(); k-- > 0;)
+        d += " L" + px(lower[k].first) + "," + px(lower[k].second);
+      d += " Z";
+    }
+    upper.clear();
+    lower.clear();
+  };
+  const double bottom = L.plot_top + L.plot_height;
+  for (size_t k = 0; k < s.x.size(); ++k) {
+    const double w = s.y_band.empty() ? NAN : s.y_band[k];
+    if (!drawable(f, s.x[k], s.y[k]) || !std::isfinite(w)) {
+      flush();
+      continue;
+    }
+    const double cx = L.x.to_px(s.x[k]);
+    upper.push_back({cx, L.y.to_px(s.y[k] + w)});
+    lower.push_back({cx, (L.y.log && s.y[k] - w <= 0) ? bottom : L.y.to_px(s.y[k] - w)});
+  }
+  flush();
+  return d;
 }
 
 void draw_series(const Figure& f, const Layout& L, size_t index, const std::string& colour,
@@ -135,17 +184,20 @@ void draw_series(const Figure& f, const Layout& L, size_t index, const std::stri
       ++segment_points.back();
       last_point.back() = {cx, cy};
     }
-    if (has_markers(s.style))
-      markers_svg += marker(static_cast<int>(index), cx, cy, colour, "mark");
+    if (has_markers(s.style)) markers_svg += marker(shape_of(s, index), cx, cy, colour, "mark");
   }
   for (size_t g = 0; g < segments.size(); ++g) {
     if (segment_points[g] == 0) continue;
     if (segment_points[g] == 1 && !has_markers(s.style)) {  // a lone point of a line: show it
-      markers_svg += marker(0, last_point[g].first, last_point[g].second, colour, "mark");
+      markers_svg +=
+          marker(shape_of(s, index), last_point[g].first, last_point[g].second, colour, "mark");
       continue;
     }
     lines_svg += "<polyline class=\"mark line\"" + attr("points", segments[g]) + "/>";
   }
+  if (const std::string band = band_path(f, L, s); !band.empty())
+    o += "<path class=\"band\"" + attr("d", band) + attr("fill", c) +
+         attr("fill-opacity", s.dashed ? "0.08" : "0.15") + attr("stroke", "none") + "/>";
   if (!bars_svg.empty())
     o += "<g" + attr("fill", c) + attr("fill-opacity", s.dashed ? "0.35" : "0.8") +
          attr("stroke", c) + stroke_dash(s) + ">" + bars_svg + "</g>";
@@ -172,7 +224,7 @@ void draw_legend_sample(const Series& s, size_t index, const std::string& colour
          attr("y2", px(cy)) + attr("stroke", c) + attr("stroke-width", "1.8") + stroke_dash(s) +
          "/>";
   if (has_markers(s.style))
-    o += marker(static_cast<int>(index), x + 0.5 * kLegendSample, cy, colour, "");
+    o += marker(shape_of(s, index), x + 0.5 * kLegendSample, cy, colour, "");
 }
 
 void draw_axes(const Figure& f, const Layout& L, std::string& o) {
@@ -268,8 +320,12 @@ std::string render_svg(const Figure& f) {
   for (size_t i = 0; i < f.series.size(); ++i)
     if (f.series[i].style == SeriesStyle::kBars)
       draw_series(f, L, i, colours[i], bars, bar_index++, o);
+  // Then markers alone, then anything with a line: a fitted line or a class
+  // curve stays visible above a cloud of points.
   for (size_t i = 0; i < f.series.size(); ++i)
-    if (f.series[i].style != SeriesStyle::kBars) draw_series(f, L, i, colours[i], bars, 0, o);
+    if (f.series[i].style == SeriesStyle::kMarkers) draw_series(f, L, i, colours[i], bars, 0, o);
+  for (size_t i = 0; i < f.series.size(); ++i)
+    if (has_line(f.series[i].style)) draw_series(f, L, i, colours[i], bars, 0, o);
   o += "</g>";
   draw_axes(f, L, o);
   if (drawn_point_count(f) == 0)

@@ -136,6 +136,20 @@ CREATE TABLE run_events (
 );
 CREATE INDEX run_events_by_run ON run_events (run_id, id);
 )sql",
+    // 3: the camera that took the run's frames, as it identified itself
+    // (GenICam Device* features, or what V4L2 reports), so that a report can
+    // name it and tell the simulated rig from a bench.
+    R"sql(
+CREATE TABLE run_camera (
+  run_id INTEGER PRIMARY KEY REFERENCES runs (id) ON DELETE CASCADE,
+  source TEXT NOT NULL,
+  device_id TEXT NOT NULL,
+  vendor TEXT NOT NULL,
+  model TEXT NOT NULL,
+  serial TEXT NOT NULL,
+  device_version TEXT NOT NULL
+);
+)sql",
 };
 
 constexpr int kMigrationCount = static_cast<int>(sizeof(kMigrations) / sizeof(kMigrations[0]));

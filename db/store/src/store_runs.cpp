@@ -212,6 +212,23 @@ void Store::resume_run(std::int64_t run_id) {
   transaction.commit();
 }
 
+void Store::record_camera(std::int64_t run_id, const RunCamera& c) {
+  sqlite::Transaction transaction(impl_->connection);
+  impl_->run_state_of(run_id);
+  sqlite::Statement insert(impl_->connection,
+                           "INSERT OR REPLACE INTO run_camera (run_id, source, device_id, vendor, "
+                           "model, serial, device_version) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7)");
+  insert.bind(1, run_id)
+      .bind(2, c.source)
+      .bind(3, c.device_id)
+      .bind(4, c.vendor)
+      .bind(5, c.model)
+      .bind(6, c.serial)
+      .bind(7, c.device_version)
+      .run();
+  transaction.commit();
+}
+
 void Store::record_event(std::int64_t run_id, const std::string& kind, const std::string& message,
                          std::optional<std::int64_t> plan_index) {
   const std::string& path = impl_->connection.path();
@@ -255,6 +272,9 @@ std::vector<Run> read_runs(sqlite::Connection& connection, std::optional<std::in
   if (only) select.bind(1, *only);
   sqlite::Statement files(connection,
                           "SELECT role, path, content, sha256 FROM run_files WHERE run_id = ?1");
+  sqlite::Statement camera(connection,
+                           "SELECT source, device_id, vendor, model, serial, device_version "
+                           "FROM run_camera WHERE run_id = ?1");
   std::vector<Run> runs;
   while (select.step()) {
     Run run;
@@ -279,6 +299,12 @@ std::vector<Run> read_runs(sqlite::Connection& connection, std::optional<std::in
       }
     }
     files.reset();
+    camera.bind(1, run.id);
+    if (camera.step()) {
+      run.camera = RunCamera{camera.get_text(0), camera.get_text(1), camera.get_text(2),
+                             camera.get_text(3), camera.get_text(4), camera.get_text(5)};
+    }
+    camera.reset();
     runs.push_back(std::move(run));
   }
   return runs;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "commands.hpp"
+#include "rig/telemetry/progress_view.hpp"
 #include "rig/telemetry/telemetry.hpp"
 
 namespace rig::cli {
@@ -18,12 +19,13 @@ struct CtlArgs {
   bool json = false;
 };
 
-// What the reply means for a person: the status as pretty JSON, otherwise a
-// short line with the state the sweep reports.
+// What the reply means for a person: the status as one line
+// (telemetry::describe_status), otherwise a short line with the state the
+// sweep reports.
 void print_reply(const CtlArgs& a, const nlohmann::json& reply) {
   const nlohmann::json& status = reply.contains("status") ? reply["status"] : nlohmann::json();
   if (a.command == "status") {
-    std::cout << status.dump(2) << "\n";
+    std::cout << telemetry::describe_status(status) << "\n";
     return;
   }
   const std::string state =
@@ -61,7 +63,7 @@ void add_ctl_command(CLI::App& app, ExitStatus& status) {
   CLI::App* cmd =
       app.add_subcommand("ctl", "Ask a running sweep for its status, or pause, resume or abort it");
   cmd->add_option("COMMAND", args->command,
-                  "status: print the sweep's state and progress (JSON)\n"
+                  "status: print the sweep's state, progress and ETA (one line; JSON with --json)\n"
                   "pause: stop after the current position until resumed\n"
                   "resume: continue a paused sweep (also one the controller paused after a "
                   "bench alarm)\n"

@@ -25,7 +25,7 @@ struct MonitorArgs {
 // Redraws the dashboard in place: cursor home, each line erased to its end
 // (ANSI EL), everything below erased (ED) - no full clear, so no flicker.
 void redraw(const telemetry::ProgressView& view) {
-  std::string screen = view.dashboard(telemetry::terminal_width());
+  std::string screen = view.dashboard(telemetry::terminal_width(), telemetry::terminal_height());
   std::string out = "\x1b[H";
   for (char c : screen) {
     if (c == '\n') out += "\x1b[K";

@@ -5,9 +5,11 @@
 //
 // Exit codes: 0 written; 1 a failure while reading or writing; 2 bad input
 // (missing file, not a rig database, newer or older schema, no completed run,
-// no such run); 3 with --fail-on-regression: written, and some solver got
+// no such run, --fail-on-regression without --baseline, --out naming an
+// existing file); 3 with --fail-on-regression: written, and some solver got
 // significantly worse than the baseline (for CI of products that depend on
 // the solvers).
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -43,7 +45,21 @@ std::size_t print_regressions(const db::report::Report& report) {
   return worse;
 }
 
+// Refuses arguments that cannot give what was asked before any work.
+void check_report_args(const ReportArgs& a) {
+  if (a.fail_on_regression && a.baseline.empty())
+    throw BadInput(
+        "--fail-on-regression without --baseline: a regression is a comparison with a "
+        "baseline; expected --baseline DB or DB:RUN");
+  std::error_code ec;
+  if (std::filesystem::exists(a.out_dir, ec) && !std::filesystem::is_directory(a.out_dir, ec))
+    throw BadInput("--out " + a.out_dir +
+                   ": is an existing file, not a directory; expected a directory (created if "
+                   "missing) for report.html, report.json and the CSV tables");
+}
+
 int run_report(const ReportArgs& a) {
+  check_report_args(a);
   db::report::ReportOptions options = a.options;
   options.run_id = a.run_id;
   std::optional<db::report::RunReference> baseline;

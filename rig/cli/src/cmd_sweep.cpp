@@ -143,6 +143,9 @@ int run_on_bench(const SweepArgs& args, const sweep::SweepConfig& config,
               << " before the run started; nothing was recorded\n";
     return kExitFailure;
   }
+  const vision::CameraIdentity id = camera->identity();
+  store.record_camera(run->run_id, {camera->name(), id.device_id, id.vendor, id.model, id.serial,
+                                    id.device_version});
   return drive_run(args, config, run->plan, bench, *camera, store, run->run_id, link,
                    "resume:    rig sweep " + config.sweep_file + " --db " + store.path() +
                        " --resume " + std::to_string(run->run_id));

@@ -480,7 +480,9 @@ struct Controller::Impl {
     store.append_position(run_id, rec);
     rec.stage_times.push_back({"store_commit", vision::seconds_since(store_start)});
     log.count_stored(vision::seconds_since(started));
-    log.publish(log.position_message(rec));
+    nlohmann::json message = log.position_message(rec);
+    message["database"] = store.path();  // a monitor that joins late still names it
+    log.publish(message);
     if (rec.status == db::store::PositionStatus::kOk) {
       ++outcome.positions_ok;
       consecutive_failed = 0;

@@ -16,6 +16,7 @@ nlohmann::json position_message(const db::store::PositionRecord& rec, std::int64
     double distance = 0, reprojection = 0, generalization = 0;
     int n = 0, n_generalization = 0;
     bool converged = true;
+    bool applicable = false;  // some frame's estimate was not skipped as not applicable
   };
   std::map<std::pair<std::string, std::string>, Sum> sums;
   std::vector<std::pair<std::string, std::string>> order;
@@ -27,6 +28,7 @@ nlohmann::json position_message(const db::store::PositionRecord& rec, std::int64
       if (!sums.count(key)) order.push_back(key);
       Sum& s = sums[key];
       s.converged = s.converged && e.converged;
+      s.applicable |= e.termination != "not_applicable" && e.termination != "skipped";
       if (!e.converged) continue;
       s.distance += e.distance_m;
       s.reprojection += e.reprojection_error_px;
@@ -39,7 +41,10 @@ nlohmann::json position_message(const db::store::PositionRecord& rec, std::int64
   }
   for (const auto& key : order) {
     const Sum& s = sums[key];
-    nlohmann::json j = {{"solver", key.first}, {"scope", key.second}, {"converged", s.converged}};
+    nlohmann::json j = {{"solver", key.first},
+                        {"scope", key.second},
+                        {"converged", s.converged},
+                        {"applicable", s.applicable}};
     if (s.n > 0) {
       j["distance_m"] = s.distance / s.n;
       j["distance_error_m"] = rec.true_distance_m

@@ -42,8 +42,18 @@ std::string scope_label(const std::string& scope) {
   return scope == "target" ? "target" : "marker " + scope;
 }
 
+// `line` cut to `width` columns (UTF-8 code points, so "µ" is one column
+// and is never cut in half).
 std::string clip(std::string line, int width) {
-  if (width > 0 && static_cast<int>(line.size()) > width) line.resize(width);
+  if (width <= 0) return line;
+  int columns = 0;
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    if ((static_cast<unsigned char>(line[i]) & 0xC0) == 0x80) continue;
+    if (++columns > width) {
+      line.resize(i);
+      break;
+    }
+  }
   return line;
 }
 
@@ -73,6 +83,7 @@ void ProgressView::update(const json& message) {
     run_start_ = message;
     if (message.contains("run_id") && message["run_id"].is_number_integer())
       run_id_ = message["run_id"].get<long long>();
+    database_ = text(message, "database", "");
     plan_size_ = static_cast<int>(number(message, "plan_size").value_or(0));
     if (message.contains("solvers") && message["solvers"].is_array())
       for (const auto& s : message["solvers"])
@@ -82,6 +93,9 @@ void ProgressView::update(const json& message) {
     first_position_of_run_ = true;
   } else if (type == "position") {
     if (!stopped_) state_ = "running";
+    if (message.contains("run_id") && message["run_id"].is_number_integer())
+      run_id_ = message["run_id"].get<long long>();
+    if (const std::string db = text(message, "database", ""); !db.empty()) database_ = db;
     plan_size_ = static_cast<int>(number(message, "plan_size").value_or(plan_size_));
     const int completed = static_cast<int>(number(message, "completed").value_or(completed_ + 1));
     if (text(message, "status") == "failed") ++failed_;
@@ -226,7 +240,43 @@ std::string ProgressView::describe(const json& m) const {
   return line.str();
 }
 
-std::string ProgressView::solver_table() const {
+namespace {
+
+// A distance error for a person: mm with two decimals, or µm with one where
+// the mm would round to 0.00; "-" when missing.
+std::string distance_error_text(std::optional<double> metres) {
+  if (!metres) return "-";
+  char buf[32];
+  if (std::fabs(*metres) < 0.005e-3)
+    std::snprintf(buf, sizeof buf, "%+.1f µm", 1e6 * *metres);
+  else
+    std::snprintf(buf, sizeof buf, "%+.2f mm", 1e3 * *metres);
+  return buf;
+}
+
+// Display width of UTF-8 text: its code points (µ is one column).
+int columns(const std::string& t) {
+  int n = 0;
+  for (unsigned char c : t)
+    n += (c & 0xC0) != 0x80;
+  return n;
+}
+
+std::string pad_left(const std::string& t, int width) {
+  return std::string(static_cast<std::size_t>(std::max(0, width - columns(t))), ' ') + t;
+}
+std::string pad_right(const std::string& t, int width) {
+  return t + std::string(static_cast<std::size_t>(std::max(0, width - columns(t))), ' ');
+}
+
+bool applies(const json& estimate) {
+  return !estimate.is_object() || !estimate.contains("applicable") ||
+         !estimate["applicable"].is_boolean() || estimate["applicable"].get<bool>();
+}
+
+}  // namespace
+
+std::string ProgressView::solver_table(int max_rows) const {
   if (rows_.empty()) return "no solver estimates yet\n";
   std::vector<SolverRow> rows = rows_;
   auto rank = [&](const SolverRow& r) {
@@ -235,43 +285,85 @@ std::string ProgressView::solver_table() const {
   };
   std::stable_sort(rows.begin(), rows.end(),
                    [&](const SolverRow& a, const SolverRow& b) { return rank(a) < rank(b); });
+  int name_width = 6;
+  for (const auto& r : rows)
+    name_width = std::max(name_width, columns(r.solver));
+  auto line = [&](const std::string& solver, const std::string& scope, const std::string& error,
+                  const std::string& reprojection, const std::string& generalization,
+                  const std::string& converged) {
+    return pad_right(solver, name_width) + " " + pad_right(scope, 9) + " " + pad_left(error, 11) +
+           " " + pad_left(reprojection, 9) + " " + pad_left(generalization, 10) + "  " + converged +
+           "\n";
+  };
   std::ostringstream out;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, "%-12s %-10s %16s %14s %16s  %s\n", "solver", "scope",
-                "distance error", "reprojection", "generalization", "converged");
   out << "latest estimates (position "
       << (rows_plan_index_ ? std::to_string(*rows_plan_index_) : std::string("-")) << ")\n"
-      << buf;
-  for (const auto& r : rows) {
-    const auto err = number(r.estimate, "distance_error_m");
-    std::snprintf(
-        buf, sizeof buf, "%-12s %-10s %16s %14s %16s  %s\n", r.solver.c_str(),
-        scope_label(r.scope).c_str(),
-        (fixed(err ? std::optional<double>(1e3 * *err) : std::nullopt, "%+.2f") + " mm").c_str(),
-        (fixed(number(r.estimate, "reprojection_error_px"), "%.3f") + " px").c_str(),
-        (fixed(number(r.estimate, "generalization_error_px"), "%.3f") + " px").c_str(),
-        r.estimate.value("converged", false) ? "yes" : "no");
-    out << buf;
+      << line("solver", "scope", "dist. err", "reproj.", "general.", "converged");
+  const std::size_t shown = rows.size() <= static_cast<std::size_t>(std::max(0, max_rows))
+                                ? rows.size()
+                                : static_cast<std::size_t>(std::max(0, max_rows - 1));
+  for (std::size_t i = 0; i < shown; ++i) {
+    const SolverRow& r = rows[i];
+    if (!applies(r.estimate)) {
+      out << line(r.solver, scope_label(r.scope), "n/a", "n/a", "n/a", "n/a");
+      continue;
+    }
+    out << line(r.solver, scope_label(r.scope),
+                distance_error_text(number(r.estimate, "distance_error_m")),
+                fixed(number(r.estimate, "reprojection_error_px"), "%.3f") + " px",
+                fixed(number(r.estimate, "generalization_error_px"), "%.3f") + " px",
+                r.estimate.value("converged", false) ? "yes" : "no");
+  }
+  if (shown < rows.size()) {
+    int converged = 0;
+    std::optional<double> worst;
+    for (std::size_t i = shown; i < rows.size(); ++i) {
+      converged += rows[i].estimate.value("converged", false) ? 1 : 0;
+      if (const auto e = number(rows[i].estimate, "distance_error_m"))
+        if (!worst || std::fabs(*e) > std::fabs(*worst)) worst = e;
+    }
+    out << "... " << rows.size() - shown << " more rows: " << converged << " converged, largest "
+        << "|error| " << distance_error_text(worst) << "\n";
   }
   return out.str();
 }
 
-std::string ProgressView::dashboard(int width) const {
+std::string ProgressView::dashboard(int width, int height) const {
   std::ostringstream out;
+  std::string head;
   if (run_start_.is_object() && !run_start_.empty())
-    out << clip("run " + text(run_start_, "run_id") + "  " + text(run_start_, "sweep_file") +
-                    "  ->  " + text(run_start_, "database"),
-                width)
-        << "\n";
+    head = "run " + text(run_start_, "run_id") + "  " + text(run_start_, "sweep_file") + "  ->  " +
+           (database_.empty() ? std::string("-") : database_);
   else if (run_id_)
-    out << "run " << *run_id_ << "\n";
+    head = "run " + std::to_string(*run_id_) + " (joined after its start)  ->  " +
+           (database_.empty() ? std::string("database not yet known") : database_);
   else
-    out << (state_ == "waiting" ? "waiting for telemetry\n" : "run (joined after its start)\n");
-  out << progress_line(width) << "\n\n" << solver_table() << "\n";
+    head = state_ == "waiting" ? "waiting for telemetry" : "run (joined after its start)";
+  out << clip(head, width) << "\n" << progress_line(width) << "\n\n";
+  // Title, heading, blank line, last fault, last message and the three
+  // lines above: what is left of height - 1 goes to the table's rows.
+  const int table_rows = std::max(1, height - 1 - 3 - 2 - 3);
+  std::istringstream table(solver_table(table_rows));
+  for (std::string row; std::getline(table, row);)
+    out << clip(row, width) << "\n";
+  out << "\n";
   out << clip("last fault: " + (last_fault_.empty() ? std::string("none") : last_fault_), width)
       << "\n";
   out << clip("last: " + (last_message_.empty() ? std::string("-") : last_message_), width) << "\n";
   return out.str();
+}
+
+std::string describe_status(const json& status) {
+  if (!status.is_object()) return "no status in the reply";
+  const auto completed = number(status, "completed");
+  const auto plan = number(status, "plan_size");
+  std::ostringstream line;
+  line << "state " << text(status, "state") << ", run " << text(status, "run_id") << ": "
+       << text(status, "completed") << " of " << text(status, "plan_size") << " positions stored";
+  if (completed && plan && *plan > 0) line << fixed(100.0 * *completed / *plan, " (%.1f %%)");
+  line << ", at plan index " << text(status, "current_index") << ", ETA "
+       << format_duration(number(status, "eta_s").value_or(-1));
+  return line.str();
 }
 
 ProgressPrinter::ProgressPrinter(std::ostream& out, bool terminal, int width)
@@ -297,6 +389,14 @@ bool is_terminal(int file_descriptor) {
 
 bool stdout_is_terminal() {
   return is_terminal(STDOUT_FILENO);
+}
+
+int terminal_height(int fallback, int file_descriptor) {
+  winsize size{};
+  if (is_terminal(file_descriptor) && ::ioctl(file_descriptor, TIOCGWINSZ, &size) == 0 &&
+      size.ws_row > 0)
+    return size.ws_row;
+  return fallback;
 }
 
 int terminal_width(int fallback, int file_descriptor) {

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <regex>
+#include <set>
 
 #include "browser.hpp"
 #include "db/report/report.hpp"
@@ -49,6 +50,47 @@ TEST(ReportBrowser, RendersEveryFigureWithoutConsoleErrors) {
   EXPECT_EQ(rendered, total);
   EXPECT_EQ(body_attribute(r.dom, "data-figures-empty"), 0);
   EXPECT_TRUE(r.screenshot_written);
+}
+
+// What an engineer sees at 1400 px with the ten solvers of a sweep: nothing
+// overflows sideways, the summary is the first table, every solver has its
+// own colour in the figures, and the page logs nothing.
+TEST(ReportBrowser, TenSolversAt1400PixelsFitWithDistinctColours) {
+  if (!rig_test::chromium_available()) GTEST_SKIP() << "no /usr/bin/chromium";
+  db_test::ScratchDir dir;
+  rig_test::SyntheticRunSpec spec;
+  spec.positions = 40;
+  spec.solvers = rig_test::paper_like_solvers();
+  const char* more[] = {"dls", "lm", "oi", "epnp", "opencv_iterative", "sqpnp"};
+  for (int i = 0; i < 6; ++i) {
+    rig_test::SyntheticSolver s;
+    s.name = more[i];
+    s.intercept_m = 0.0005 * (i + 1);  // distinct results: nothing coincides
+    spec.solvers.push_back(s);
+  }
+  rig_test::write_synthetic_run(dir.file("run.db"), spec);
+  const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
+  const db::report::ReportFiles files = report.write(dir.file("out"));
+  const rig_test::BrowserResult r = rig_test::render_in_chromium(files.html, "", 1400);
+  ASSERT_TRUE(r.ran) << r.stderr_text;
+  EXPECT_EQ(r.exit_code, 0) << r.stderr_text;
+  EXPECT_TRUE(r.console_errors.empty()) << r.console_errors.front();
+  const int viewport = body_attribute(r.dom, "data-viewport-width");
+  ASSERT_GT(viewport, 1300) << "the window was not 1400 px wide";
+  EXPECT_LE(body_attribute(r.dom, "data-page-width"), viewport);
+  const auto first_table = r.dom.find("<table");
+  ASSERT_NE(first_table, std::string::npos);
+  EXPECT_EQ(r.dom.find("<table id=\"summary\">"), first_table);
+  // Fig. 8 of the pose marker: one line per solver, ten colours.
+  const auto fig = r.dom.find("<figure class=\"plot\" id=\"fig8-0\"");
+  ASSERT_NE(fig, std::string::npos);
+  const std::string svg = r.dom.substr(fig, r.dom.find("</figure>", fig) - fig);
+  const std::regex line_colour("stroke=\"(#[0-9A-Fa-f]{6})\" stroke-width=\"1.8\"");
+  std::set<std::string> colours;
+  for (auto it = std::sregex_iterator(svg.begin(), svg.end(), line_colour);
+       it != std::sregex_iterator(); ++it)
+    colours.insert((*it)[1]);
+  EXPECT_EQ(colours.size(), 10u);
 }
 
 }  // namespace

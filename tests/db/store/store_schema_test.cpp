@@ -142,7 +142,8 @@ std::string make_version1_file(const ScratchDir& dir) {
   }
   RawDb raw(path);
   raw.exec(
-      "DROP TABLE distance_bounds; DROP TABLE visible_markers; DROP TABLE run_events; "
+      "DROP TABLE run_camera; DROP TABLE distance_bounds; DROP TABLE visible_markers; "
+      "DROP TABLE run_events; "
       "ALTER TABLE positions DROP COLUMN true_viewing_angle_deg; PRAGMA user_version = 1");
   return path;
 }
@@ -167,6 +168,28 @@ TEST(StoreSchema, MigratesAVersion1FileKeepingItsPositions) {
   store.append_position(1, db_test::make_position(1));
   EXPECT_EQ(store.position(1, 1), db_test::make_position(1));
   EXPECT_EQ(RawDb(path).text("PRAGMA integrity_check"), "ok");
+}
+
+// A version 2 file (before run_camera) keeps its runs, which read as
+// "camera not recorded", and takes the camera of a new run.
+TEST(StoreSchema, MigratesAVersion2FileWhoseRunsHaveNoCamera) {
+  ScratchDir dir;
+  const std::string path = dir.file("v2.db");
+  {
+    db::store::Store store(path);
+    store.start_run(db_test::make_run_description(4));
+  }
+  RawDb(path).exec("DROP TABLE run_camera; PRAGMA user_version = 2");
+  db::store::Store store(path);
+  EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
+            std::to_string(db::store::Store::kSchemaVersion));
+  EXPECT_FALSE(store.run(1).camera.has_value());
+  const std::int64_t run = store.start_run(db_test::make_run_description(4));
+  store.record_camera(
+      run, {"gige:127.0.0.1", "rig-rig-sim-1", "rig", "rig-sim", "1", "realism default"});
+  ASSERT_TRUE(store.run(run).camera.has_value());
+  EXPECT_EQ(store.run(run).camera->model, "rig-sim");
+  EXPECT_FALSE(store.run(1).camera.has_value());
 }
 
 TEST(StoreSchema, ReadOnlyNeverCreatesAMissingFile) {

@@ -55,6 +55,29 @@ TEST_F(StoreTest, RoundTripsEveryFieldOfARunWithTheHashesOfItsFiles) {
   }
 }
 
+// The camera as it identified itself, every field back as written; a
+// resumed run records the camera it resumed with instead.
+TEST_F(StoreTest, RecordsTheCameraOfARunAndReplacesItOnResume) {
+  const std::int64_t id = store_.start_run(make_run_description(10));
+  EXPECT_FALSE(store_.run(id).camera.has_value());
+  const db::store::RunCamera first{"gige:127.0.0.1", "rig-rig-sim-0001", "rig", "rig-sim",
+                                   "0001",           "realism harsh"};
+  store_.record_camera(id, first);
+  ASSERT_TRUE(store_.run(id).camera.has_value());
+  const db::store::RunCamera back = *store_.run(id).camera;
+  EXPECT_EQ(back.source, first.source);
+  EXPECT_EQ(back.device_id, first.device_id);
+  EXPECT_EQ(back.vendor, first.vendor);
+  EXPECT_EQ(back.model, first.model);
+  EXPECT_EQ(back.serial, first.serial);
+  EXPECT_EQ(back.device_version, first.device_version);
+  store_.record_camera(id,
+                       {"v4l2:/dev/video0", "", "uvcvideo", "HD Webcam", "usb-1", "driver 6.1.0"});
+  EXPECT_EQ(store_.run(id).camera->model, "HD Webcam");
+  EXPECT_EQ(store_.runs().front().camera->vendor, "uvcvideo");
+  EXPECT_THROW(store_.record_camera(id + 1, first), db::store::StoreError);
+}
+
 TEST_F(StoreTest, RefusesARunWhoseJsonDoesNotParseNamingTheField) {
   db::store::RunDescription d = make_run_description(1);
   d.config_json = "{\"frames\": ";

@@ -150,10 +150,14 @@ class RigCtl : public ::testing::Test {
   }
 };
 
-TEST_F(RigCtl, StatusPrintsTheSweepsStatusAsJson) {
+TEST_F(RigCtl, StatusPrintsOneLineForPeopleAndTheWholeReplyWithJson) {
   const auto r = ctl("status");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(json::parse(r.out),
+  EXPECT_EQ(r.out,
+            "state running, run 7: 13 of 201 positions stored (6.5 %), at plan index -, ETA --\n");
+  const auto j = ctl("status --json");
+  EXPECT_EQ(j.exit_code, 0) << j.err;
+  EXPECT_EQ(json::parse(j.out)["status"],
             (json{{"state", "running"}, {"run_id", 7}, {"completed", 13}, {"plan_size", 201}}));
 }
 

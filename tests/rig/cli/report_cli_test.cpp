@@ -87,6 +87,26 @@ TEST(RigReport, BadInputExitsWithTwoAndNamesTheFile) {
   EXPECT_EQ(no_out.exit_code, 2) << no_out.err;
 }
 
+TEST(RigReport, RefusesArgumentsThatCannotGiveWhatWasAsked) {
+  Scratch dir;
+  rig_test::write_synthetic_run(dir.file("run.db"), spec(1));
+  // A regression needs a baseline to regress from.
+  const RigRun alone =
+      run_rig("report " + dir.file("run.db") + " --fail-on-regression --out " + dir.file("o"));
+  EXPECT_EQ(alone.exit_code, 2) << alone.err;
+  EXPECT_NE(alone.err.find("--fail-on-regression without --baseline"), std::string::npos)
+      << alone.err;
+  EXPECT_FALSE(fs::exists(dir.file("o")));
+  // --out naming a file: refused, naming it, and the file left as it was.
+  std::ofstream(dir.file("notes.txt")) << "keep me";
+  const RigRun onto_file =
+      run_rig("report " + dir.file("run.db") + " --out " + dir.file("notes.txt"));
+  EXPECT_EQ(onto_file.exit_code, 2) << onto_file.err;
+  EXPECT_NE(onto_file.err.find(dir.file("notes.txt")), std::string::npos) << onto_file.err;
+  EXPECT_NE(onto_file.err.find("existing file"), std::string::npos) << onto_file.err;
+  EXPECT_EQ(slurp(dir.file("notes.txt")), "keep me");
+}
+
 // Exit code 3 only with --fail-on-regression and only when a solver got
 // significantly worse (a 10 mm larger intercept: z ~ 30, see
 // tests/db/report_compare_test.cpp).

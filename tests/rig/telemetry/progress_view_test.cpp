@@ -3,7 +3,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <sstream>
+#include <vector>
 
 namespace {
 
@@ -230,9 +232,10 @@ TEST(ProgressView, SolverTableKeepsTheLatestErrorPerSolverAndScopeInRunOrder) {
   view.update(later);
   const std::string table = view.solver_table();
   EXPECT_NE(table.find("latest estimates (position 1)"), std::string::npos) << table;
-  const auto analytic = table.find("analytic     marker 0");
-  const auto lm_marker = table.find("lm           marker 0");
-  const auto lm_target = table.find("lm           target");
+  // Columns aligned to the longest name ("analytic", 8 characters).
+  const auto analytic = table.find("analytic marker 0");
+  const auto lm_marker = table.find("lm       marker 0");
+  const auto lm_target = table.find("lm       target");
   ASSERT_NE(analytic, std::string::npos) << table;
   ASSERT_NE(lm_marker, std::string::npos) << table;
   ASSERT_NE(lm_target, std::string::npos) << table;
@@ -295,6 +298,77 @@ TEST(ProgressView, DashboardShowsRunProgressSolversAndTheLastFault) {
   EXPECT_NE(screen.find("last fault: fault at position 1: link: modbus timeout (action: retry)"),
             std::string::npos)
       << screen;
+}
+
+// Ten solvers on two scopes with long names: 20 rows do not fit 24 lines
+// with the run, progress, faults and last message, so the screen keeps the
+// progress line and summarises the rows that do not fit.
+TEST(ProgressView, DashboardFitsEightyByTwentyFourWithTenSolvers) {
+  rig::telemetry::ProgressView view;
+  json start = run_start(50);
+  start["solvers"] = json::array();
+  json p = position(3, 6.0, 50);
+  p["estimates"] = json::array();
+  for (int i = 0; i < 10; ++i) {
+    const std::string name = "solver_with_a_long_name_" + std::to_string(i);
+    start["solvers"].push_back(name);
+    p["estimates"].push_back(estimate(name, "0", 0.0001 * i));
+    json target = estimate(name, "target", 0.000002);
+    if (i == 0) target["applicable"] = false;
+    p["estimates"].push_back(target);
+  }
+  view.update(start);
+  view.update(position(1, 2.0, 50));
+  view.update(position(2, 4.0, 50));
+  view.update(p);
+  const std::string screen = view.dashboard(80, 24);
+  std::istringstream lines(screen);
+  std::vector<std::string> rows;
+  for (std::string l; std::getline(lines, l);)
+    rows.push_back(l);
+  // At most 23 lines: the 24th would scroll the first off the terminal.
+  EXPECT_LE(rows.size(), 23u) << screen;
+  for (const std::string& r : rows) {  // columns: UTF-8 code points (µ is 2 bytes, 1 column)
+    const auto columns = std::count_if(
+        r.begin(), r.end(), [](char c) { return (static_cast<unsigned char>(c) & 0xC0) != 0x80; });
+    EXPECT_LE(columns, 80) << r;
+  }
+  EXPECT_EQ(rows[1], view.progress_line(80));
+  EXPECT_NE(rows[1].find("ETA"), std::string::npos);
+  EXPECT_NE(screen.find(" more rows: "), std::string::npos) << screen;
+  // 0.0001 m is 0.10 mm; 2 µm would round to +0.00 mm, so it shows in µm.
+  EXPECT_NE(screen.find("+0.10 mm"), std::string::npos) << screen;
+  const std::string table = view.solver_table();
+  EXPECT_NE(table.find("+2.0 µm"), std::string::npos) << table;
+  EXPECT_NE(table.find("solver_with_a_long_name_0 target" + std::string(12, ' ') + "n/a" +
+                       std::string(7, ' ') + "n/a" + std::string(8, ' ') + "n/a  n/a"),
+            std::string::npos)
+      << table;
+  // Every row's scope column starts at the same place.
+  const auto first = table.find("solver_with_a_long_name_0 marker 0");
+  EXPECT_NE(first, std::string::npos) << table;
+}
+
+TEST(ProgressView, AMonitorThatJoinsLateShowsTheRunAndDatabase) {
+  rig::telemetry::ProgressView view;
+  json p = position(5, 10.0, 20);
+  p["database"] = "runs/ci.db";
+  view.update(p);
+  const std::string screen = view.dashboard(80, 24);
+  EXPECT_EQ(screen.rfind("run 7 (joined after its start)  ->  runs/ci.db\n", 0), 0u) << screen;
+}
+
+TEST(DescribeStatus, IsOneLineForPeople) {
+  EXPECT_EQ(rig::telemetry::describe_status({{"state", "running"},
+                                             {"run_id", 7},
+                                             {"completed", 45},
+                                             {"plan_size", 200},
+                                             {"current_index", 45},
+                                             {"eta_s", 83.0}}),
+            "state running, run 7: 45 of 200 positions stored (22.5 %), at plan index 45, ETA "
+            "1m23s");
+  EXPECT_EQ(rig::telemetry::describe_status({{"state", "paused"}}),
+            "state paused, run -: - of - positions stored, at plan index -, ETA --");
 }
 
 TEST(ProgressPrinter, WithoutATerminalPrintsOneLinePerMessage) {

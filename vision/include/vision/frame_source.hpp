@@ -77,6 +77,14 @@ struct CaptureCounters {
   uint64_t discarded = 0;   // whole frames dropped because they were not the one asked for
 };
 
+// How a camera identifies itself (GenICam DeviceVendorName, DeviceModelName,
+// DeviceSerialNumber, DeviceVersion; V4L2: driver, card, bus, driver
+// version). "" where the device does not say.
+struct CameraIdentity {
+  std::string device_id;  // GigE: vendor-model-serial as Aravis's discovery lists it
+  std::string vendor, model, serial, device_version;
+};
+
 class FrameSource {
  public:
   virtual ~FrameSource() = default;
@@ -100,6 +108,9 @@ class FrameSource {
   // The spec this source was made from, e.g. "gige:127.0.0.1".
   virtual std::string name() const = 0;
   virtual CaptureCounters counters() const = 0;
+  // After open(): what the device says it is; every field "" for sources that
+  // are no device (a replay) and before open().
+  virtual CameraIdentity identity() const { return {}; }
 };
 
 // How a camera is driven; every field documents its default.

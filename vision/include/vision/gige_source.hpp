@@ -48,7 +48,8 @@ class GigeSource final : public FrameSource {
 
   // After open(): the camera's device id as Aravis's discovery lists it
   // (vendor-model-serial).
-  const std::string& device_id() const { return device_id_; }
+  const std::string& device_id() const { return identity_.device_id; }
+  CameraIdentity identity() const override { return identity_; }
   // After open(): whether the receiving thread got real-time scheduling
   // (CaptureOptions::realtime_receiver).
   bool realtime_receiver() const;
@@ -58,7 +59,7 @@ class GigeSource final : public FrameSource {
   std::string device_;
   CaptureOptions options_;
   CaptureCounters counters_;
-  std::string device_id_;
+  CameraIdentity identity_;
   std::unique_ptr<Impl> impl_;
 };
 

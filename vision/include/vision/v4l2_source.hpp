@@ -35,6 +35,9 @@ class V4l2Source final : public FrameSource {
   void close() override;
 
   std::string name() const override { return "v4l2:" + path_; }
+  // After open(): the driver (vendor), card (model), bus (serial) and driver
+  // version VIDIOC_QUERYCAP reports.
+  CameraIdentity identity() const override { return identity_; }
   CaptureCounters counters() const override { return counters_; }
 
  private:
@@ -45,6 +48,7 @@ class V4l2Source final : public FrameSource {
   std::string path_;
   CaptureOptions options_;
   CaptureCounters counters_;
+  CameraIdentity identity_;
   int fd_ = -1;
   bool streaming_ = false;
   std::vector<Mapping> buffers_;

@@ -11,13 +11,17 @@
 //         data-figures-total="N"               (figures found by the script)
 //         data-figures-rendered="M"            (non-empty box and >= 1 visible mark)
 //         data-figures-empty="K"               (figures drawn with a "no data" note)
-//         data-page-height="H">                (document height in CSS px, for screenshots)
+//         data-page-height="H"                 (document height in CSS px, for screenshots)
+//         data-page-width="W"                  (document width in CSS px: > the viewport's
+//         data-viewport-width="V">              width when something overflows sideways)
 // and data-rendered="yes|no" on each <figure>. With scripts disabled the page
 // reads the same; only these attributes are missing.
 #pragma once
 
+#include <limits>
 #include <string>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "db/report/svg_plot.hpp"
@@ -32,12 +36,21 @@ struct Cell {
   std::string text;       // escaped
   std::string css_class;  // "", "better", "worse", "paper", "num" (or several, space-separated)
   std::string title;      // tooltip ("" = none), escaped
+  // For a writer that shows numbers in other units than it stores them
+  // (db::report writes SI to JSON and CSV, mm and µs on the page): the value
+  // the text was written from (NaN: not numeric) and the writer's code for
+  // its kind (0: none). Page ignores both.
+  double value = std::numeric_limits<double>::quiet_NaN();
+  int quantity = 0;
 };
 
 struct Table {
   std::string id, caption;          // id: unique in the page ("" = none)
   std::vector<std::string> header;  // column headings; every row has this many cells
   std::vector<std::vector<Cell>> rows;
+  // Shown folded: <details> with the caption and the row count as its
+  // <summary>, opened by the reader (long tables under their summary).
+  bool folded = false;
 };
 
 // Builds the document in order of the calls; str() writes it. Ids (headings,
@@ -51,7 +64,12 @@ class Page {
   // contents; id "" = generated from the text ("sec-" + slug, made unique).
   void heading(int level, const std::string& text, const std::string& id = "");
   void paragraph(const std::string& text);  // <p>, escaped
-  // <table> with <caption>, <thead>, <tbody>. Throws std::invalid_argument
+  // <dl class="facts">: one <dt>term</dt><dd>value</dd> per pair, escaped
+  // (a run's header: what was measured with what).
+  void facts(const std::vector<std::pair<std::string, std::string>>& facts);
+  // <table> with <caption>, <thead>, <tbody>, in a <div class="table-wrap">
+  // that scrolls sideways if the table is wider than the page (the page
+  // itself never does); folded: inside <details>. Throws std::invalid_argument
   // naming the table and row when a row has not header.size() cells (if the
   // header is not empty).
   void table(const Table& table);

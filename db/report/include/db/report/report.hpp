@@ -88,6 +88,13 @@ struct ReportOptions {
   // Fig. 12 draws at most this many positions per solver (every n-th by plan
   // index); the fit always uses every estimate. Larger: heavier page.
   std::size_t max_points_per_series = 300;
+  // Two solvers of one scope coincide when they have the same used estimates
+  // per position and their per-position mean |distance error| differ by at
+  // most this at every position, metres: they are listed together and drawn
+  // once. 0.1 um is a hundredth of the smallest within-position jitter a
+  // 1280 px camera gives a 0.1 m target (~10 um), so only solvers that
+  // compute the same pose (the same algorithm in two libraries) coincide.
+  double coincidence_m = 1e-7;
 };
 
 // One of the ten distance classes of one solver and scope.
@@ -137,10 +144,17 @@ struct SolverStudy {
   std::size_t failed = 0;     // applicable but not converged
   std::size_t used = 0;       // converged with a known true distance: the accuracy figures
   std::map<std::string, std::size_t> failures_by_termination;
-  stats::Summary reprojection_px;     // Table 2
-  stats::Summary generalization_px;   // Table 3 (scope "0")
-  stats::Summary error_m;             // Table 6: estimated - true
-  stats::Summary abs_error_m;         // |estimated - true|
+  stats::Summary reprojection_px;    // Table 2
+  stats::Summary generalization_px;  // Table 3 (scope "0")
+  stats::Summary error_m;            // Table 6: estimated - true
+  stats::Summary abs_error_m;        // |estimated - true|
+  double abs_error_p95_m = 0;        // 95th percentile of |estimated - true| (NaN: none used)
+  // 95 % confidence half-width of the mean |error| (abs_error_m.mean), m:
+  // t(0.975, n - 1) * sd / sqrt(n) over the n per-position means
+  // (position_abs_error_m), because the frames of one position share its
+  // pose and are not independent draws, the positions are. NaN below two
+  // positions.
+  double abs_error_ci95_m = 0;
   stats::Summary relative_error_pct;  // 100 |estimated - true| / true (the paper's "0.81 %")
   stats::Summary time_us;             // every applicable estimate (Table 6)
   // Per-position means (one number per position, independent across
@@ -153,6 +167,10 @@ struct SolverStudy {
   std::vector<DistanceClassStudy> classes;        // the ten classes, empty ones included
   std::vector<AngleClassStudy> by_viewing_angle;  // 0-90 degrees in 10 degree classes
   std::size_t ambiguity_checked = 0, ambiguous = 0, flip_checked = 0, flips = 0;
+  // The solver (same scope, earlier in the sorted list) whose results this
+  // one coincides with (ReportOptions::coincidence_m); "" for none. Such a
+  // solver is not drawn again and shares its summary row.
+  std::string coincides_with;
   // Fig. 12: per-position mean estimated against true distance (thinned).
   std::vector<double> plot_true_m, plot_estimated_m;
 };
@@ -174,6 +192,16 @@ struct MarkerSizeClass {
   std::size_t detected = 0;  // of those, detected in the frame
   stats::Summary edge_fit_residual_px;
   double corner_jitter_px = 0;  // pooled within-position sd of the corners, px (NaN: < 2 frames)
+};
+
+// A visible marker (at the true pose) that some frame of its position did
+// not detect: what explains a dip of the detection rate.
+struct MissedMarker {
+  std::int64_t plan_index = 0;
+  int marker_id = -1;
+  double side_px = 0;          // projected side at the true pose
+  double true_distance_m = 0;  // NaN: not known
+  std::size_t frames = 0, frames_detected = 0;
 };
 
 struct StageStudy {
@@ -217,6 +245,7 @@ struct RunStudy {
   std::vector<SolverStudy> solvers;  // sorted by solver, then scope ("0" before "target")
   std::vector<ClassCornerNoise> corner_noise;
   std::vector<MarkerSizeClass> marker_sizes;  // empty when visible markers were not recorded
+  std::vector<MissedMarker> missed_markers;   // by plan index, then marker id
   bool visible_markers_recorded = false;
   // Left out of every detection figure because of a non-finite value (a
   // detector or simulator bug): detections with a non-finite corner
@@ -229,6 +258,9 @@ struct RunStudy {
   std::vector<store::RunEvent> events;
   ReportOptions options;
 
+  // The solvers that coincide with `s` (whose coincides_with is s.solver),
+  // in order.
+  std::vector<std::string> coinciding(const SolverStudy& s) const;
   // nullptr when the run has no such solver and scope.
   const SolverStudy* find(const std::string& solver, const std::string& scope) const;
 };

@@ -51,9 +51,19 @@ struct Series {
                                 // units, >= 0; a NaN entry draws no bar for that point
   SeriesStyle style = SeriesStyle::kMarkers;
   bool dashed = false;  // e.g. a fitted line or the paper's reference values
-  // "" = the palette's next colour (Okabe-Ito, colour-blind safe); otherwise
+  // "" = the palette's next colour (ten, colour-blind safe); otherwise
   // any SVG colour ("#0072B2", "black"), written escaped.
   std::string colour;
+  // Marker shape: -1 = by the series' position in the figure; 0..9 = one of
+  // the ten shapes (circle, square, triangle up, diamond, triangle down, open
+  // circle, open square, cross, plus, open diamond), kept across figures by
+  // a caller that gives each solver its own.
+  int marker = -1;
+  // Empty, or same size as y: half-width (±, y units, >= 0) of a shaded band
+  // drawn under the series in its colour (<path class="band">), e.g. the
+  // spread while y_error shows the confidence interval of the mean; broken
+  // at points with a NaN entry or that are not drawn.
+  std::vector<double> y_band = {};
 };
 
 struct Figure {

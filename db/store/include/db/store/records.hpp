@@ -49,6 +49,18 @@ struct RunDescription {
   std::string host;                   // host name of the machine that ran the sweep
 };
 
+// The camera of a run as it identified itself when the sweep opened it.
+// GigE Vision: the GenICam features DeviceVendorName, DeviceModelName,
+// DeviceSerialNumber and DeviceVersion; V4L2: the driver as vendor, the card
+// as model, the bus as serial and the driver version. "" where the camera
+// does not say. The simulated rig's camera reports vendor "rig", model
+// "rig-sim" and device version "realism <profile>" (docs/simulated-rig.md).
+struct RunCamera {
+  std::string source;     // the frame source spec, e.g. "gige:127.0.0.1"
+  std::string device_id;  // e.g. "rig-rig-sim-0001" (vendor-model-serial), "" if unknown
+  std::string vendor, model, serial, device_version;
+};
+
 // A run as stored. Times are UTC, ISO 8601 with milliseconds
 // ("2026-11-22T06:18:24.123Z"), set by the store from the system clock.
 struct Run {
@@ -57,7 +69,8 @@ struct Run {
   std::string started_at;
   std::optional<std::string> ended_at;  // absent while running
   RunStatus status = RunStatus::kRunning;
-  std::string status_reason;  // why it ended that way; empty while running
+  std::string status_reason;        // why it ended that way; empty while running
+  std::optional<RunCamera> camera;  // absent: not recorded (runs before schema 3, replays)
 };
 
 // Duration of one stage of a position (e.g. "move", "settle", "capture",

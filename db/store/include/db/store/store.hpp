@@ -92,7 +92,7 @@ std::string sqlite_library_version();
 class Store {
  public:
   // Schema version this code creates and reads (the number of migrations).
-  static constexpr int kSchemaVersion = 2;
+  static constexpr int kSchemaVersion = 3;
   // PRAGMA application_id of a rig run database: "RIGD" in ASCII.
   static constexpr std::int32_t kApplicationId = 0x52494744;
 
@@ -139,6 +139,11 @@ class Store {
   // the run already has position.plan_index; StoreError if the run does not
   // exist, is not running, or plan_index is outside [0, plan_size).
   void append_position(std::int64_t run_id, const PositionRecord& position);
+
+  // Records the camera that takes the run's frames (table run_camera, one
+  // per run): a resumed run records the camera it was resumed with, replacing
+  // the earlier one. Throws StoreError for an unknown run.
+  void record_camera(std::int64_t run_id, const RunCamera& camera);
 
   // Records a fault, pause or resume of the run (RunEvent kinds), with the
   // store's clock; its own transaction. Throws StoreError for an unknown run

@@ -5,10 +5,12 @@
 // Messages (published by the controller, one JSON object each):
 //   run_start {run_id, database, plan_size, first_index, resumed, solvers[], frames_per_position,
 //              sweep_file, plan (its description)}
-//   position  {run_id, plan_index, completed, plan_size, status "ok"|"failed", failure_reason,
+//   position  {run_id, database, plan_index, completed, plan_size, status "ok"|"failed",
+//              failure_reason,
 //              commanded{x_mm,y_mm}, measured{x_mm,y_mm}, true_distance_m, markers_detected,
 //              estimates[{solver, scope "0"(marker id)|"target", distance_m, distance_error_m,
-//              reprojection_error_px, generalization_error_px|null, converged}],
+//              reprojection_error_px, generalization_error_px|null, converged,
+//              applicable (false: the solver does not apply to the scope)}],
 //              stage_times_s{...}, elapsed_s}
 //   fault     {run_id, plan_index, kind, message, action}
 //   state     {run_id, state "running"|"paused"|"stopping"}
@@ -60,14 +62,20 @@ class ProgressView {
   std::string describe(const nlohmann::json& message) const;
 
   // The latest estimate per solver and scope (marker, whole target): distance
-  // error (mm), reprojection and generalization errors (px), convergence; one
-  // row each, solvers in the run's order.
-  std::string solver_table() const;
+  // error (mm, or µm where mm would round to 0.00), reprojection and
+  // generalization errors (px), convergence (every column "n/a" for a solver
+  // that does not apply to the scope); one row each, solvers in the run's order, columns
+  // aligned to the longest solver name. At most `max_rows` rows (besides the
+  // title and the heading): the rest are summarised in one line (how many,
+  // how many converged, the largest |distance error| among them).
+  std::string solver_table(int max_rows = 1000) const;
 
-  // The monitor's screen: run, progress line, solver table, last fault and
-  // the last message, as lines of at most `width` characters (table rows may
-  // be wider on terminals narrower than the table).
-  std::string dashboard(int width) const;
+  // The monitor's screen, at most `height` - 1 lines of at most `width`
+  // characters, so that it never scrolls a terminal of that size: run id,
+  // sweep file and database (the database from any position message for a
+  // monitor that joined late), the progress line with the ETA, the solver
+  // table cut to the rows that fit, last fault and the last message.
+  std::string dashboard(int width, int height = 24) const;
 
   // "waiting" (no message yet), "running", "paused", then the run_stop status
   // ("completed", "aborted", "failed").
@@ -95,6 +103,7 @@ class ProgressView {
   std::string state_ = "waiting";
   bool stopped_ = false;
   std::optional<long long> run_id_;
+  std::string database_;
   nlohmann::json run_start_;
   std::vector<std::string> solver_order_;
   int completed_ = 0;
@@ -129,11 +138,18 @@ class ProgressPrinter {
   ProgressView view_;
 };
 
+// `rig ctl status` for people: the reply's status object as
+//   state running, run 7: 45 of 201 positions stored (22.4 %), at plan index 45, ETA 1m23s
+// with "-" for what the reply lacks.
+std::string describe_status(const nlohmann::json& status);
+
 // Whether a file descriptor (1 standard output, 2 standard error) is a
 // terminal, and its width in columns (`fallback` if it is not a terminal or
 // does not say).
 bool is_terminal(int file_descriptor);
 bool stdout_is_terminal();
 int terminal_width(int fallback = 80, int file_descriptor = 1);
+// Its height in rows (`fallback` likewise).
+int terminal_height(int fallback = 24, int file_descriptor = 1);
 
 }  // namespace rig::telemetry
