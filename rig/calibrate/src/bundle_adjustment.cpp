@@ -128,23 +128,18 @@ std::vector<int> fixed_indices(const CalibrationOptions& options) {
   return fixed;
 }
 
-// The Jacobian at the solution as a dense matrix, free columns only.
-Eigen::MatrixXd free_jacobian(ceres::Problem& problem, const std::vector<bool>& is_fixed) {
+// The Jacobian at the solution as a dense matrix in the tangent space: the
+// free parameters' columns, in order (a fixed parameter has no column).
+Eigen::MatrixXd free_jacobian(ceres::Problem& problem) {
   ceres::Problem::EvaluateOptions eval;
   eval.apply_loss_function = true;
   ceres::CRSMatrix crs;
   problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs);
-  std::vector<int> column(kParameterCount, -1);
-  int free = 0;
-  for (int i = 0; i < kParameterCount; ++i)
-    if (!is_fixed[static_cast<std::size_t>(i)]) column[static_cast<std::size_t>(i)] = free++;
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, free);
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int row = 0; row < crs.num_rows; ++row)
     for (int k = crs.rows[static_cast<std::size_t>(row)];
-         k < crs.rows[static_cast<std::size_t>(row) + 1]; ++k) {
-      const int c = column[static_cast<std::size_t>(crs.cols[static_cast<std::size_t>(k)])];
-      if (c >= 0) J(row, c) = crs.values[static_cast<std::size_t>(k)];
-    }
+         k < crs.rows[static_cast<std::size_t>(row) + 1]; ++k)
+      J(row, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
   return J;
 }
 
@@ -281,7 +276,7 @@ CalibrationResult calibrate(const CalibrationProblem& input, const CalibrationOp
   result.iterations = static_cast<int>(summary.iterations.size());
   result.termination = summary.BriefReport();
   fill_statistics(input, p, &result);
-  check_rank(free_jacobian(problem, is_fixed), is_fixed);
+  check_rank(free_jacobian(problem), is_fixed);
   result.correlation = Eigen::MatrixXd::Identity(kParameterCount, kParameterCount);
   if (options.covariance) fill_covariance(problem, p.data(), &result, options.threads);
   result.solve_seconds =
