@@ -1,7 +1,7 @@
 // rig calibrate on a paper-sized calibration sweep (target: at most 10 s on a
 // 2-core machine like CI's): the paper's 1,939 positions (7 rows x 277
 // distances over the simulated bench's travel), 3 frames each, the paper's
-// target, ~46 corners per position (~90,000 corners), 0.1 px corner noise,
+// A4 target (4 markers), ~46 corners per position (~90,000 corners), 0.1 px corner noise,
 // written once through the run store.
 //  - BM_Calibrate: the bundle adjustment with the rank check and Ceres
 //    Covariance (what rig calibrate reports), 2 threads.
@@ -28,7 +28,6 @@ const rig::calibrate::CalibrationProblem& paper_problem() {
     spec.true_geometry = rig_test::calibration_true_geometry();
     spec.nominal_rig_toml = rig_test::calibration_nominal_rig_toml();
     spec.frames_per_position = 3;
-    spec.target_layout_path = rig_test::calibration_target_path(RIG_SOURCE_DIR);
     for (int row = 0; row < 7; ++row)
       for (int c = 0; c < 277; ++c) {
         const int column = row % 2 == 0 ? c : 276 - c;
