@@ -42,5 +42,7 @@ void add_monitor_command(CLI::App& app, ExitStatus& status);
 void add_ctl_command(CLI::App& app, ExitStatus& status);
 // rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression] --out DIR (cmd_report.cpp).
 void add_report_command(CLI::App& app, ExitStatus& status);
+// rig calibrate DB[:RUN] --out DIR [--fix NAME] (cmd_calibrate.cpp).
+void add_calibrate_command(CLI::App& app, ExitStatus& status);
 
 }  // namespace rig::cli

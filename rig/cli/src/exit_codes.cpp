@@ -8,6 +8,7 @@
 #include "db/report/report.hpp"
 #include "db/store/store.hpp"
 #include "motion/errors.hpp"
+#include "rig/calibrate/calibration.hpp"
 #include "rig/sweep/run_record.hpp"
 #include "rig/sweep/sweep_config.hpp"
 #include "rig/sweep/sweep_plan.hpp"
@@ -42,6 +43,7 @@ const ErrorKind kErrorKinds[] = {
     {is<sweep::SweepConfigError>, kExitBadInput, ""},
     {is<sweep::PlanError>, kExitBadInput, ""},
     {is<sweep::RunMismatch>, kExitBadInput, ""},
+    {is<calibrate::CalibrationInputError>, kExitBadInput, ""},  // also an unobservable plan
     {is<config::ConfigError>, kExitBadInput, ""},  // every config file: sweep, profile, target, rig
     {is<config::JsonInputError>, kExitBadInput, ""},  // JSON too big, too deep or malformed
     {is<vision::CalibrationError>, kExitBadInput, ""},

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   rig::cli::add_monitor_command(app, status);
   rig::cli::add_ctl_command(app, status);
   rig::cli::add_report_command(app, status);
+  rig::cli::add_calibrate_command(app, status);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,182 @@
+// rig::calibrate: the bench calibrates its own camera and rig geometry.
+//
+// A translation stage with known displacements turns the planar target into
+// a 3D calibration object (Tsai 1987, "A versatile camera calibration
+// technique for high-accuracy 3D machine vision metrology using off-the-shelf
+// TV cameras and lenses", IEEE J. Robotics and Automation 3(4)). One joint
+// bundle adjustment (Ceres, Huber loss) over every detected corner of every
+// frame of a calibration sweep estimates at once:
+//   - the intrinsics fx, fy, cx, cy (px) and distortion k1, k2, p1, p2, k3
+//     (vision/camera.hpp), each fixable;
+//   - the camera rotation relative to the bench axes, R_bench_cam =
+//     R_nominal * Rot(misalignment) (rotation vector, degrees, about the
+//     nominal camera axes as in a rig file, docs/frames.md);
+//   - the target orientation in the bench frame, R_bench_target =
+//     R_nominal * Rot(tilt);
+//   - the camera-to-target offset at bench zero, d = t_bench_target -
+//     t_carriage_cam (bench axes, metres in the API, mm in files).
+// Knowns: the bench read-backs (positions.measured_x_mm / measured_y_mm) and
+// the target layout. A corner P (target frame) seen with the carriage at
+// (x, y) mm projects through the camera model from
+//   p_cam = R_bench_cam^T (R_bench_target P + d - (x, y, 0) / 1000).
+// With translation-only motion the camera's offset on the carriage and the
+// target's origin enter only through their difference d: the output keeps the
+// camera offset of the nominal rig geometry and puts the target origin at
+// offset + d (docs/calibration.md).
+//
+// Observability (check_observable): the plan must move the camera both
+// towards the target (bench x) and across it (bench y). With one bench
+// distance the focal lengths trade against the target distance (a planar
+// target at one depth); with one row (no y motion) the rotation about the
+// bench x axis trades against the target's tilt, with one column (no x
+// motion) the rotation about bench y as well. After the solve, the Jacobian
+// at the solution (columns scaled to unit norm) must have full rank: its
+// smallest singular value over its largest at least kMinRelativeSingularValue,
+// else the parameter with the largest share of the weakest direction is named.
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "vision/camera.hpp"
+#include "vision/rig_geometry.hpp"
+#include "vision/target.hpp"
+
+namespace rig::calibrate {
+
+// A run database, run or its contents that cannot be calibrated from: no such
+// file or run, no detections, a bad stored file. The message names the input.
+// Bad input (exit 2).
+class CalibrationInputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The plan cannot separate two parameters; the message names them and why.
+class UnobservablePlan : public CalibrationInputError {
+ public:
+  using CalibrationInputError::CalibrationInputError;
+};
+
+// One detected marker corner: what the bundle adjustment fits.
+struct CornerObservation {
+  std::int64_t plan_index = 0;
+  double x_mm = 0, y_mm = 0;  // bench read-back, mm
+  int marker_id = 0;
+  int corner = 0;                                            // 0..3 = A..D
+  Eigen::Vector3d target_point_m = Eigen::Vector3d::Zero();  // target frame, m
+  Eigen::Vector2d pixel = Eigen::Vector2d::Zero();           // distorted px
+};
+
+// What a calibration starts from: the nominal camera and geometry (starting
+// values; the geometry's camera offset is kept) and the observations.
+struct CalibrationProblem {
+  std::string source;  // "run.db:3", for messages
+  vision::Camera nominal_camera = vision::Camera::paper_default();
+  vision::RigGeometry nominal_geometry;
+  vision::Target target = vision::Target::paper_default();
+  std::vector<CornerObservation> corners;
+};
+
+// Reads run `run_id` (default: the latest run with detections) of the run
+// database at db_path: every detection of every frame of every ok position
+// with a read-back, and the stored calibration, layout and rig geometry
+// (empty calibration or layout: the built-in defaults). Throws
+// CalibrationInputError naming the file and run when the file is missing or
+// not a run database, the run does not exist, or it has no detections of
+// layout markers; the stored files' own errors (vision::CalibrationError,
+// config::ConfigError) name the stored file.
+CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64_t> run_id);
+
+// The parameters, in this order (names as in calibration.json).
+constexpr int kParameterCount = 18;
+constexpr int kIntrinsicCount = 9;  // the first nine: fx fy cx cy k1 k2 p1 p2 k3
+extern const std::array<const char*, kParameterCount> kParameterNames;
+extern const std::array<const char*, kParameterCount> kParameterUnits;
+// Index in kParameterNames of `name`; -1 when there is none.
+int parameter_index(const std::string& name);
+
+struct CalibrationOptions {
+  // Intrinsic parameters held at their nominal values, by name ("k3").
+  std::vector<std::string> fixed;
+  double huber_px = 1.0;  // robust loss scale, px of corner error
+  int threads = 2;        // Ceres threads
+  int max_iterations = 100;
+  bool covariance = true;  // compute standard deviations and correlations
+};
+
+// Smallest relative singular value of the scaled Jacobian for a full-rank
+// (observable) problem.
+constexpr double kMinRelativeSingularValue = 1e-9;
+
+struct ParameterEstimate {
+  std::string name, unit;
+  double value = 0;
+  double sd = 0;  // standard deviation; 0 for a fixed parameter
+  bool fixed = false;
+};
+
+struct CalibrationResult {
+  vision::Camera camera = vision::Camera::paper_default();
+  vision::RigGeometry geometry;  // camera offset: nominal; target origin: offset + d
+  std::array<ParameterEstimate, kParameterCount> parameters;
+  // Correlations of the free parameters (kParameterCount x kParameterCount;
+  // rows and columns of fixed parameters are 0, their diagonal 1).
+  Eigen::MatrixXd correlation;
+  // Residual scale: sqrt(sum r^2 / (2 corners - free parameters)), px per
+  // coordinate; the covariance (J^T J)^-1 is scaled by its square.
+  double sigma_px = 0;
+  double rms_px = 0;  // RMS corner error |r|, px
+  std::map<std::int64_t, double> rms_by_position_px;
+  std::map<int, double> rms_by_marker_px;
+  std::size_t corners = 0;
+  int iterations = 0;
+  double solve_seconds = 0;
+  std::string termination;  // Ceres's report line
+};
+
+// Refuses a plan that cannot separate the parameters (rule above): throws
+// UnobservablePlan naming the parameters. Precondition: problem.corners not empty.
+void check_observable(const CalibrationProblem& problem);
+
+// Runs check_observable, then the bundle adjustment from the nominal values,
+// then the rank check and (options.covariance) Ceres Covariance. Throws
+// UnobservablePlan, CalibrationInputError for an unknown fixed name, and
+// std::runtime_error when Ceres fails.
+CalibrationResult calibrate(const CalibrationProblem& problem, const CalibrationOptions& options);
+
+// RMS corner error |r| in px of the observations at the given plan indices
+// (all when empty) predicted from bench read-backs through camera and geometry.
+double reprojection_rms_px(const CalibrationProblem& problem, const vision::Camera& camera,
+                           const vision::RigGeometry& geometry,
+                           const std::vector<std::int64_t>& plan_indices = {});
+
+// Calibrates on the even plan indices and predicts the odd ones.
+struct HeldOutCheck {
+  std::size_t fit_positions = 0, held_out_positions = 0;
+  double fit_rms_px = 0, held_out_rms_px = 0;
+};
+HeldOutCheck held_out_check(const CalibrationProblem& problem, CalibrationOptions options);
+
+// The observations whose plan index is even (even = true) or odd.
+CalibrationProblem alternate_positions(const CalibrationProblem& problem, bool even);
+
+// Files written into out_dir (created if missing).
+struct CalibrationFiles {
+  std::string opencv, ros, rig, json;
+};
+// Writes camera.yaml (OpenCV FileStorage, vision::Camera::load reads it),
+// camera_info.yaml (ROS camera_info), rig.toml (a rig geometry file) and
+// calibration.json (every parameter with its standard deviation, the
+// correlation matrix, residual RMS per position and per marker, the held-out
+// check). Throws std::runtime_error naming a file that cannot be written.
+CalibrationFiles write_calibration(const std::string& out_dir, const CalibrationProblem& problem,
+                                   const CalibrationResult& result, const HeldOutCheck& held_out);
+
+}  // namespace rig::calibrate

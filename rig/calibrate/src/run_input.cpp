@@ -1,0 +1,120 @@
+// read_run (calibration.hpp): detections, read-backs and the stored files of a run.
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "config/reader.hpp"
+#include "db/store/store.hpp"
+#include "rig/calibrate/calibration.hpp"
+
+namespace rig::calibrate {
+namespace {
+
+// A stored file written to a private temporary folder so that the loaders
+// that take a path read it; removed when done.
+class TemporaryCopy {
+ public:
+  TemporaryCopy(const db::store::StoredFile& file, const std::string& fallback_name) {
+    std::string pattern =
+        (std::filesystem::temp_directory_path() / "rig-calibrate-XXXXXX").string();
+    if (mkdtemp(pattern.data()) == nullptr)
+      throw std::runtime_error("cannot create a temporary folder for the stored " + fallback_name);
+    dir_ = pattern;
+    const std::string name = std::filesystem::path(file.path).filename().string();
+    path_ = (dir_ / (name.empty() ? fallback_name : name)).string();
+    std::ofstream out(path_, std::ios::binary);
+    out << file.content;
+    if (!out) throw std::runtime_error("cannot write " + path_);
+  }
+  ~TemporaryCopy() {
+    std::error_code ignored;
+    std::filesystem::remove_all(dir_, ignored);
+  }
+  TemporaryCopy(const TemporaryCopy&) = delete;
+  TemporaryCopy& operator=(const TemporaryCopy&) = delete;
+  const std::string& path() const { return path_; }
+
+ private:
+  std::filesystem::path dir_;
+  std::string path_;
+};
+
+db::store::Run pick_run(const db::store::Store& store, const std::string& db_path,
+                        std::optional<std::int64_t> run_id) {
+  const std::vector<db::store::Run> runs = store.runs();
+  if (run_id) {
+    for (const db::store::Run& r : runs)
+      if (r.id == *run_id) return r;
+    throw CalibrationInputError(db_path + ": there is no run " + std::to_string(*run_id) +
+                                " (the file holds " + std::to_string(runs.size()) + " runs)");
+  }
+  if (runs.empty()) throw CalibrationInputError(db_path + ": the database holds no run");
+  return runs.back();
+}
+
+void read_stored_files(const db::store::Run& run, CalibrationProblem* p) {
+  const db::store::RunDescription& d = run.description;
+  if (!d.camera_calibration.content.empty()) {
+    const TemporaryCopy copy(d.camera_calibration, "camera.yaml");
+    p->nominal_camera = vision::Camera::load(copy.path());
+  }
+  if (!d.target_layout.content.empty()) {
+    const TemporaryCopy copy(d.target_layout, "target.toml");
+    p->target = vision::Target::load(copy.path());
+  }
+  if (d.rig_geometry.content.empty())
+    throw CalibrationInputError(p->source + ": the run stored no rig geometry (run_files)");
+  const config::Document rig = config::Document::parse<vision::RigConfigError>(
+      d.rig_geometry.content, d.rig_geometry.path + " (stored with " + p->source + ")",
+      "the rig geometry");
+  p->nominal_geometry = vision::RigGeometry::load(rig);
+}
+
+void add_position(const db::store::PositionRecord& position, CalibrationProblem* p) {
+  for (const db::store::FrameRecord& frame : position.frames)
+    for (const db::store::DetectionRecord& det : frame.detections) {
+      if (!p->target.has_marker(det.marker_id)) continue;
+      const std::array<Eigen::Vector3d, 4> corners = p->target.corners_m(det.marker_id);
+      for (int c = 0; c < 4; ++c) {
+        const Eigen::Vector2d px(det.corners_px[static_cast<std::size_t>(2 * c)],
+                                 det.corners_px[static_cast<std::size_t>(2 * c + 1)]);
+        if (!px.allFinite()) continue;
+        p->corners.push_back({position.plan_index, *position.measured_x_mm, *position.measured_y_mm,
+                              det.marker_id, c, corners[static_cast<std::size_t>(c)], px});
+      }
+    }
+}
+
+}  // namespace
+
+CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64_t> run_id) {
+  if (!std::filesystem::is_regular_file(db_path))
+    throw CalibrationInputError(db_path + ": no such run database (expected a file written by " +
+                                "rig sweep)");
+  db::store::StoreOptions options;
+  options.read_only = true;
+  std::optional<db::store::Store> store;
+  try {
+    store.emplace(db_path, options);
+  } catch (const db::store::StoreError& e) {
+    throw CalibrationInputError(std::string("not a readable run database: ") + e.what());
+  }
+  const db::store::Run run = pick_run(*store, db_path, run_id);
+  CalibrationProblem p;
+  p.source = db_path + ":" + std::to_string(run.id);
+  read_stored_files(run, &p);
+  for (const std::int64_t index : store->completed_position_indices(run.id)) {
+    const db::store::PositionRecord position = store->position(run.id, index);
+    if (position.status != db::store::PositionStatus::kOk || !position.measured_x_mm ||
+        !position.measured_y_mm)
+      continue;
+    add_position(position, &p);
+  }
+  if (p.corners.empty())
+    throw CalibrationInputError(p.source + ": the run has no detections of the layout's markers " +
+                                "at positions with a bench read-back; nothing to calibrate from");
+  return p;
+}
+
+}  // namespace rig::calibrate
