@@ -71,8 +71,8 @@ class FirstUse : public ::testing::Test {
   std::string sim_rig_file(const std::string& camera_address) {
     std::ifstream in(kConfig + "/sim.toml");
     std::string text((std::istreambuf_iterator<char>(in)), {});
-    text =
-        std::regex_replace(text, std::regex("\"(benches|rigs|targets)/"), "\"" + kConfig + "/$1/");
+    text = std::regex_replace(text, std::regex("\"(benches|rigs|targets|realism)/"),
+                              "\"" + kConfig + "/$1/");
     text = std::regex_replace(text, std::regex("port = 1502"), "port = 0");
     text = std::regex_replace(text, std::regex("address = \"127.0.0.1\""),
                               "address = \"" + camera_address + "\"");
