@@ -1,6 +1,7 @@
 // The paper's own figures (Maidi, Didier, Ababsa, Mallem 2010, Tables 2-6 and
-// §3, DOI 10.1007/s00138-008-0170-y), shown beside ours, as printed there; the paper computed them on 1,400 poses (Tables 2-3) and
-// 1,939 bench positions (Tables 4-6) with its own marker and camera.
+// §3, DOI 10.1007/s00138-008-0170-y), shown beside ours, as printed there; the paper computed them
+// on 1,400 poses (Tables 2-3) and 1,939 bench positions (Tables 4-6) with its own marker and
+// camera.
 #include "db/report/report.hpp"
 
 namespace db::report {
