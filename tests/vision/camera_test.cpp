@@ -178,6 +178,18 @@ TEST_F(CalibrationFiles, MissingFileNamesTheFile) {
   expect_error(path("nope.yaml"), "cannot be opened");
 }
 
+// OpenCV 4.6's XML reader dereferences a null pointer on a NUL byte inside a
+// tag (the input libFuzzer found, cut to its cause); the loader refuses any
+// control byte before OpenCV sees the file.
+TEST_F(CalibrationFiles, ControlByteIsRefusedBeforeOpenCvParsesIt) {
+  const std::string xml =
+      std::string("<?xml version=\"1.0\"?>\n<opencv_storage>\n<image_width>736</image_width>\n") +
+      "<distortion_coefficients type_id=" + std::string(1, '\0') +
+      "&pencv-matrix\"><rows>1</rows></distortion_coefficients>\n</opencv_storage>\n";
+  std::ofstream(path("nul.xml"), std::ios::binary) << xml;
+  expect_error(path("nul.xml"), "line 4: holds the control byte 0x00");
+}
+
 TEST_F(CalibrationFiles, MissingKeyNamesTheKey) {
   cv::FileStorage fs(path("k.yaml"), cv::FileStorage::WRITE);
   fs << "image_width" << 736 << "image_height" << 571 << "camera_matrix"

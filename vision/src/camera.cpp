@@ -2,6 +2,7 @@
 
 #include <Eigen/LU>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/core/persistence.hpp>
@@ -100,6 +101,23 @@ constexpr std::size_t kMaxIndentColumns = 256;
   throw CalibrationError("calibration file '" + path + "': line " + std::to_string(line) + ": " +
                          what + "; expected a calibration nesting at most " +
                          std::to_string(kMaxCalibrationDepth) + " levels deep");
+}
+
+// A YAML/XML calibration is text: OpenCV 4.6's XML reader dereferences a
+// null pointer on a NUL byte inside a tag (found by fuzzing), so control
+// bytes other than tab, carriage return and line feed are refused first.
+void check_text_bytes(const std::string& path, const std::string& text) {
+  int line = 1;
+  for (const char ch : text) {
+    const auto c = static_cast<unsigned char>(ch);
+    if (c == '\n') ++line;
+    if ((c < 0x20 && c != '\t' && c != '\r' && c != '\n') || c == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", c);
+      throw CalibrationError("calibration file '" + path + "': line " + std::to_string(line) +
+                             ": holds the control byte " + hex + "; expected a YAML/XML text file");
+    }
+  }
 }
 
 // YAML: flow collections ([ {) nest by brackets, block collections by the
@@ -202,6 +220,7 @@ Camera Camera::load(const std::string& path) {
                            " MiB; expected a YAML/XML calibration of a few KiB");
   if (text.find_first_not_of(" \t\r\n") == std::string::npos)
     throw CalibrationError("calibration file '" + path + "': is empty");
+  check_text_bytes(path, text);
 
   // OpenCV's YAML reader insists on its "%YAML:1.0" header; ROS camera_info
   // files are plain YAML, so give them one.
