@@ -190,6 +190,17 @@ TEST_F(CalibrationFiles, ControlByteIsRefusedBeforeOpenCvParsesIt) {
   expect_error(path("nul.xml"), "line 4: holds the control byte 0x00");
 }
 
+// OpenCV allocates the matrix a file declares before reading its data: a
+// declared 100000 x 100000 matrix asked for 80 GB (found by libFuzzer).
+TEST_F(CalibrationFiles, HugeDeclaredMatrixIsRefusedBeforeOpenCvAllocatesIt) {
+  write("huge.yaml",
+        "%YAML:1.0\n---\nimage_width: 736\nimage_height: 571\n"
+        "camera_matrix: !!opencv-matrix\n   rows: 100000\n   cols: 100000\n   dt: d\n"
+        "   data: [ 706.1, 0, 388.0, 0, 731.1, 269.6, 0, 0, 1 ]\n");
+  expect_error(path("huge.yaml"), "key 'camera_matrix'");
+  expect_error(path("huge.yaml"), "declares rows x cols = 100000x100000; expected 1 to 16");
+}
+
 TEST_F(CalibrationFiles, MissingKeyNamesTheKey) {
   cv::FileStorage fs(path("k.yaml"), cv::FileStorage::WRITE);
   fs << "image_width" << 736 << "image_height" << 571 << "camera_matrix"

@@ -39,6 +39,19 @@ int read_int(const cv::FileNode& root, const std::string& path, const std::strin
   return v;
 }
 
+// A calibration matrix is at most 3x3 (or 1x14 coefficients): rows and cols
+// are bounded before OpenCV allocates the matrix they declare (a file declaring 10^5 x 10^5 would
+// otherwise take 80 GB; found by fuzzing).
+constexpr int kMaxMatrixSide = 16;
+void check_matrix_shape(const cv::FileNode& n, const std::string& path, const std::string& key) {
+  if (!n["rows"].isInt() || !n["cols"].isInt()) fail(path, key, "must give integer rows and cols");
+  const int rows = static_cast<int>(n["rows"]), cols = static_cast<int>(n["cols"]);
+  if (rows < 1 || cols < 1 || rows > kMaxMatrixSide || cols > kMaxMatrixSide)
+    fail(path, key,
+         "declares rows x cols = " + std::to_string(rows) + "x" + std::to_string(cols) +
+             "; expected 1 to " + std::to_string(kMaxMatrixSide) + " of each");
+}
+
 // Reads a numeric matrix stored either as an OpenCV matrix (`!!opencv-matrix`
 // or XML `type_id="opencv-matrix"`) or as a ROS map {rows, cols, data}.
 // Returns the values row-major and the shape.
@@ -48,6 +61,7 @@ std::vector<double> read_matrix(const cv::FileNode& root, const std::string& pat
   if (n.empty()) fail(path, key, "is missing");
   std::vector<double> values;
   if (n.isMap() && !n["dt"].empty()) {
+    check_matrix_shape(n, path, key);
     cv::Mat m;
     try {
       n >> m;
@@ -60,8 +74,7 @@ std::vector<double> read_matrix(const cv::FileNode& root, const std::string& pat
     *cols = m.cols;
     values.assign(m.begin<double>(), m.end<double>());
   } else if (n.isMap() && !n["data"].empty()) {
-    if (!n["rows"].isInt() || !n["cols"].isInt())
-      fail(path, key, "must give integer rows and cols");
+    check_matrix_shape(n, path, key);
     *rows = static_cast<int>(n["rows"]);
     *cols = static_cast<int>(n["cols"]);
     const cv::FileNode data = n["data"];
