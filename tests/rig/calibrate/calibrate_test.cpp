@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <opencv2/calib3d.hpp>
 
+#include "opencv_reference.hpp"
 #include "rig/calibrate/calibration.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_calibration.hpp"
@@ -171,67 +171,15 @@ TEST(Calibrate, FixedParameterKeepsItsNominalValue) {
   EXPECT_THROW(rig::calibrate::calibrate(problem, options), rig::calibrate::CalibrationInputError);
 }
 
-// cv::calibrateCamera on the same detections, each position a separate view
-// (initial guess: the nominal camera). It cannot predict a position without a
-// rig geometry, so its held-out prediction uses the nominal (hand-measured)
-// geometry; the per-view solvePnP refit is printed for information only.
-struct OpenCvFit {
-  vision::Camera camera = vision::Camera::paper_default();
-  double pnp_held_out_rms_px = 0;
-};
-
-OpenCvFit opencv_calibrate(const CalibrationProblem& fit, const CalibrationProblem& held_out) {
-  const auto views = [](const CalibrationProblem& p) {
-    std::map<std::int64_t, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> v;
-    for (const auto& o : p.corners) {
-      v[o.plan_index].first.emplace_back(o.target_point_m.x(), o.target_point_m.y(), 0.0f);
-      v[o.plan_index].second.emplace_back(o.pixel.x(), o.pixel.y());
-    }
-    return v;
-  };
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const auto& [index, view] : views(fit)) {
-    if (view.first.size() < 8) continue;
-    object.push_back(view.first);
-    image.push_back(view.second);
-  }
-  cv::Mat K = fit.nominal_camera.camera_matrix_cv(), dist = fit.nominal_camera.distortion_cv();
-  std::vector<cv::Mat> rvecs, tvecs;
-  cv::calibrateCamera(object, image,
-                      cv::Size(fit.nominal_camera.width_px(), fit.nominal_camera.height_px()), K,
-                      dist, rvecs, tvecs, cv::CALIB_USE_INTRINSIC_GUESS);
-  OpenCvFit out;
-  out.camera = vision::Camera(
-      {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2)},
-      {dist.at<double>(0), dist.at<double>(1), dist.at<double>(2), dist.at<double>(3),
-       dist.at<double>(4)},
-      736, 571);
-  double sum = 0;
-  std::size_t n = 0;
-  for (const auto& [index, view] : views(held_out)) {
-    if (view.first.size() < 4) continue;
-    cv::Mat rvec, tvec;
-    cv::solvePnP(view.first, view.second, K, dist, rvec, tvec);
-    std::vector<cv::Point2f> projected;
-    cv::projectPoints(view.first, rvec, tvec, K, dist, projected);
-    for (std::size_t i = 0; i < projected.size(); ++i) {
-      const cv::Point2f e = projected[i] - view.second[i];
-      sum += e.dot(e);
-      ++n;
-    }
-  }
-  out.pnp_held_out_rms_px = std::sqrt(sum / static_cast<double>(n));
-  return out;
-}
-
+// cv::calibrateCamera: tests/rig/calibrate/opencv_reference.hpp. Its held-out
+// prediction from the read-backs uses the nominal (hand-measured) geometry.
 TEST(Calibrate, BeatsOpenCvCalibrateCameraOnTheSameDetections) {
   const db_test::ScratchDir dir;
   const CalibrationProblem problem = problem_for(dir, 5, calibration_plan());
   const CalibrationProblem even = rig::calibrate::alternate_positions(problem, true);
   const CalibrationProblem odd = rig::calibrate::alternate_positions(problem, false);
   const CalibrationResult ours = rig::calibrate::calibrate(even, CalibrationOptions{});
-  const OpenCvFit cv_fit = opencv_calibrate(even, odd);
+  const rig_test::OpenCvFit cv_fit = rig_test::opencv_calibrate(even, odd);
   const double ours_held_out = rig::calibrate::reprojection_rms_px(odd, ours.camera, ours.geometry);
   const double cv_held_out =
       rig::calibrate::reprojection_rms_px(odd, cv_fit.camera, problem.nominal_geometry);
