@@ -36,10 +36,10 @@ OpenCvFit opencv_calibrate(const rig::calibrate::CalibrationProblem& fit,
   cv::Mat K = nominal.camera_matrix_cv(), dist = nominal.distortion_cv();
   std::vector<cv::Mat> rvecs, tvecs;
   OpenCvFit out;
-  // One thread: with OpenCV's thread pool the sums of its Levenberg-Marquardt
-  // are taken in a varying order, and on views that all share one target
-  // orientation (ill-conditioned focal lengths) two runs on the same data
-  // ended 0.3 px apart in fx.
+  // One thread, for a repeatable figure: the focal lengths are
+  // ill-conditioned on views that all share one target orientation, and two
+  // runs on the same detections, with OpenCV's thread pool, once ended
+  // 0.28 px apart in fx.
   const int threads = cv::getNumThreads();
   cv::setNumThreads(1);
   out.rms_px = cv::calibrateCamera(object, image, cv::Size(nominal.width_px(), nominal.height_px()),
