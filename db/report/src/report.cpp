@@ -74,7 +74,7 @@ RunStudy study_run(const std::string& database, const ReportOptions& options) {
   try {
     RunStudy study = report::compute_study(data, options);
     if (truth) {
-      truth->positions.clear();  // kept in the study: the files it came from
+      truth->positions.clear();  // the study keeps only the files it came from
       study.truth = std::move(truth);
     }
     return study;
@@ -92,8 +92,8 @@ Report::Report(const std::string& database, const ReportOptions& options,
   if (baseline) {
     ReportOptions baseline_options = options;
     baseline_options.run_id = baseline->run_id;
-    baseline_options.recompute_truth =
-        nullptr;  // the baseline is judged against its own stored truth
+    // The baseline is judged against its own stored truth.
+    baseline_options.recompute_truth = nullptr;
     baseline_ = study_run(baseline->database, baseline_options);
     comparison_ = compare_runs(study_, *baseline_, options.significance_k);
   }
