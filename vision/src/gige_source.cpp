@@ -211,6 +211,62 @@ void latch_clock(ArvCamera* camera, CameraClock* clock) {
   }
 }
 
+// A buffer's image, or why there is none: a status other than success, a
+// format the capture path does not read, or too few bytes for its format.
+struct Payload {
+  cv::Mat image;
+  ArvPixelFormat format = 0;
+  bool unreadable_format = false;
+  std::string problem;
+};
+
+Payload payload_of(ArvBuffer* buffer) {
+  Payload p;
+  const ArvBufferStatus status = arv_buffer_get_status(buffer);
+  size_t size = 0;
+  const void* data =
+      status == ARV_BUFFER_STATUS_SUCCESS ? arv_buffer_get_image_data(buffer, &size) : nullptr;
+  if (data == nullptr) {
+    p.problem = status_name(status);
+    return p;
+  }
+  p.format = arv_buffer_get_image_pixel_format(buffer);
+  if (!is_readable_pixel_format(p.format)) {
+    p.unreadable_format = true;
+    return p;
+  }
+  try {
+    p.image = gige_payload_to_image(data, size, arv_buffer_get_image_width(buffer),
+                                    arv_buffer_get_image_height(buffer), p.format);
+  } catch (const PixelFormatError& e) {
+    p.problem = e.what();  // a readable format, but not all of its bytes
+  }
+  return p;
+}
+
+std::chrono::system_clock::time_point wall_time(int64_t ns_since_epoch) {
+  return std::chrono::system_clock::time_point(
+      std::chrono::duration_cast<std::chrono::system_clock::duration>(
+          std::chrono::nanoseconds(ns_since_epoch)));
+}
+
+// The Frame of a whole buffer; its timestamps feed the camera clock.
+Frame frame_of(ArvBuffer* buffer, const Payload& payload, CameraClock* clock) {
+  Frame frame;
+  frame.image = payload.image;
+  frame.significant_bits = significant_bits(payload.format);
+  frame.frame_id = arv_buffer_get_frame_id(buffer);
+  frame.camera_timestamp_ns = arv_buffer_get_timestamp(buffer);
+  const auto arrival_ns = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer));
+  frame.host_time = wall_time(arrival_ns);
+  if (frame.camera_timestamp_ns != 0) {
+    const auto camera_ns = static_cast<int64_t>(frame.camera_timestamp_ns);
+    clock->add_arrival(camera_ns, arrival_ns);
+    frame.exposure_host_time = wall_time(*clock->to_host_ns(camera_ns));
+  }
+  return frame;
+}
+
 }  // namespace
 
 struct GigeSource::Impl {
@@ -386,56 +442,27 @@ Frame GigeSource::grab(std::chrono::milliseconds timeout) {
       continue;
     }
     impl_->note_frame_id(arv_buffer_get_frame_id(buffer), counters_);
-    const ArvBufferStatus status = arv_buffer_get_status(buffer);
     const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
-    size_t size = 0;
-    const void* data =
-        status == ARV_BUFFER_STATUS_SUCCESS ? arv_buffer_get_image_data(buffer, &size) : nullptr;
-    const int width = data != nullptr ? arv_buffer_get_image_width(buffer) : 0;
-    const int height = data != nullptr ? arv_buffer_get_image_height(buffer) : 0;
-    const ArvPixelFormat format = data != nullptr ? arv_buffer_get_image_pixel_format(buffer) : 0;
-    if (data != nullptr && !is_readable_pixel_format(format)) {
+    const Payload payload = payload_of(buffer);
+    if (payload.unreadable_format) {
       arv_stream_push_buffer(impl_->stream, buffer);
-      throw CaptureError(who, "the camera sends pixel format " + pixel_format_name(format) +
+      throw CaptureError(who, "the camera sends pixel format " + pixel_format_name(payload.format) +
                                   ", which the capture path does not read; set "
                                   "capture.pixel_format to one of " +
                                   readable_pixel_formats());
     }
-    cv::Mat image;
-    std::string short_payload;
-    if (data != nullptr) {
-      try {
-        image = gige_payload_to_image(data, size, width, height, format);
-      } catch (const PixelFormatError& e) {
-        short_payload = e.what();  // a readable format, but not all of its bytes
-      }
-    }
-    if (image.empty()) {
+    if (payload.image.empty()) {
       ++counters_.incomplete;
       arv_stream_push_buffer(impl_->stream, buffer);
       if (!may_retry)
         throw CaptureError(who, "frame " + std::to_string(frame_id) + " incomplete (" +
-                                    (data != nullptr ? short_payload : status_name(status)) +
-                                    "), after " + std::to_string(attempt) + " retries");
+                                    payload.problem + "), after " + std::to_string(attempt) +
+                                    " retries");
       ++counters_.retries;
       if (options_.software_trigger) trigger();
       continue;
     }
-    Frame frame;
-    frame.image = std::move(image);
-    frame.significant_bits = significant_bits(format);
-    frame.frame_id = frame_id;
-    frame.camera_timestamp_ns = arv_buffer_get_timestamp(buffer);
-    frame.host_time = std::chrono::system_clock::time_point(
-        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-            std::chrono::nanoseconds(arv_buffer_get_system_timestamp(buffer))));
-    if (frame.camera_timestamp_ns != 0) {
-      const auto camera_ns = static_cast<int64_t>(frame.camera_timestamp_ns);
-      clock_.add_arrival(camera_ns, static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer)));
-      frame.exposure_host_time = std::chrono::system_clock::time_point(
-          std::chrono::duration_cast<std::chrono::system_clock::duration>(
-              std::chrono::nanoseconds(*clock_.to_host_ns(camera_ns))));
-    }
+    Frame frame = frame_of(buffer, payload, &clock_);
     frame.origin = who;
     arv_stream_push_buffer(impl_->stream, buffer);
     ++counters_.delivered;
