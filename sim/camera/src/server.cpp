@@ -14,6 +14,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -263,17 +264,20 @@ std::string ipv4_addresses_of(const std::vector<std::string>& found) {
 class GenicamFile {
  public:
   explicit GenicamFile(const char* xml) {
-    char name[] = "/tmp/rig-sim-genicam-XXXXXX";
-    const int fd = mkstemp(name);
+    const std::string pattern =
+        (std::filesystem::temp_directory_path() / "rig-sim-genicam-XXXXXX").string();
+    std::vector<char> name(pattern.begin(), pattern.end());
+    name.push_back('\0');
+    const int fd = mkstemp(name.data());
     if (fd < 0)
-      throw std::runtime_error(std::string("sim camera: cannot write its GenICam file in /tmp: ") +
+      throw std::runtime_error("sim camera: cannot write its GenICam file " + pattern + ": " +
                                std::strerror(errno));
     const size_t size = std::strlen(xml);
     const bool written = write(fd, xml, size) == static_cast<ssize_t>(size);
     ::close(fd);
-    path_ = name;
+    path_ = name.data();
     if (!written) {
-      unlink(name);
+      unlink(path_.c_str());
       throw std::runtime_error("sim camera: cannot write its GenICam file " + path_);
     }
   }

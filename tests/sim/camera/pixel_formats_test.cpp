@@ -60,11 +60,11 @@ class PixelFormats : public ::testing::Test {
     return frame;
   }
   // The sensor's codes of the last frame.
-  cv::Mat rendered(double exposure_scale = 1.0) const {
+  cv::Mat rendered(double exposure_scale = 1.0, double gain = 1.0) const {
     const auto e = server_->last_exposure();
     return renderer_
         ->render(geometry_.T_cam_target(e.x0_mm, e.y0_mm), e.seed,
-                 sim::scene::SensorExposure{exposure_scale, e.exposure_us * 1e-6, 1.0})
+                 sim::scene::SensorExposure{exposure_scale, e.exposure_us * 1e-6, gain})
         .image;
   }
 
@@ -181,9 +181,9 @@ TEST_F(PixelFormats, ColourSensorStartsInBayerRG8) {
 }
 
 // The older (SFNC 1.x) and the current (SFNC 2.x) feature names: the capture
-// path sets the exposure with whichever the camera has, and the camera's
-// frame is then the render of that exposure (half the nominal 10 ms: half
-// the electrons).
+// path sets the exposure and the gain with whichever the camera has, and the
+// camera's frame is then the render of that exposure (half the nominal 10 ms:
+// half the electrons) amplified by 6 dB.
 class GenicamNames : public PixelFormats, public ::testing::WithParamInterface<const char*> {};
 
 TEST_P(GenicamNames, ExposureAndTriggerWorkWithTheCamerasNames) {
@@ -204,10 +204,11 @@ TEST_P(GenicamNames, ExposureAndTriggerWorkWithTheCamerasNames) {
   }
   vision::CaptureOptions capture;
   capture.exposure_us = 5000;
+  capture.gain = 6;  // dB: Gain (float) or GainRaw (integer), both whole dB here
   const vision::Frame frame = grab("Mono8", capture);
   EXPECT_EQ(server_->last_exposure().exposure_us, 5000);
   EXPECT_EQ(server_->last_exposure().frame_id, frame.frame_id);
-  EXPECT_EQ(differing_pixels(frame.image, rendered(0.5)), 0);
+  EXPECT_EQ(differing_pixels(frame.image, rendered(0.5, std::pow(10.0, 6 / 20.0))), 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Names, GenicamNames, ::testing::Values("sfnc", "legacy"));
