@@ -165,12 +165,20 @@ void read_capture(Table capture, SweepConfig* c) {
   read_camera(capture, c);
   c->frames_per_position = static_cast<int>(capture.integer_or("frames_per_position", 3, 1, 1000));
   c->capture.software_trigger = capture.boolean_or("software_trigger", true);
-  c->capture.pixel_format =
-      capture.choice_or("pixel_format", "Mono8", {"Mono8", "Mono10", "Mono12", "Mono16"});
+  c->capture.pixel_format = capture.choice_or(
+      "pixel_format", "Mono8", {"Mono8", "Mono10", "Mono12", "Mono12Packed", "Mono16", "BayerRG8"});
   c->capture.exposure_us = capture.optional_number(
       "exposure_us", {"an exposure time > 0 µs", [](double v) { return v > 0; }});
   c->capture.gain = capture.optional_number(
       "gain", {"a gain >= 0 (camera units, usually dB)", [](double v) { return v >= 0; }});
+  if (const auto packet = capture.optional_number(
+          "packet_size", {"a GigE Vision packet size in bytes, an integer 576..9000 (1500 on a "
+                          "standard MTU; more needs jumbo frames)",
+                          [](double v) { return v >= 576 && v <= 9000 && v == std::floor(v); }}))
+    c->capture.packet_size_bytes = static_cast<int>(*packet);
+  c->capture.inter_packet_delay_ns = capture.optional_number(
+      "inter_packet_delay_ns", {"a GigE Vision inter-packet delay in ns, 0..1e8",
+                                [](double v) { return v >= 0 && v <= 1e8; }});
   c->grab_timeout = std::chrono::milliseconds(
       capture.integer_or("grab_timeout_ms", c->grab_timeout.count(), 1, 3600000));
   c->capture.retries = static_cast<int>(capture.integer_or("retries", 2, 0, 100));
@@ -344,6 +352,8 @@ nlohmann::json SweepConfig::to_json() const {
         {"pixel_format", capture.pixel_format},
         {"exposure_us", optional_json(capture.exposure_us)},
         {"gain", optional_json(capture.gain)},
+        {"packet_size", optional_json(capture.packet_size_bytes)},
+        {"inter_packet_delay_ns", optional_json(capture.inter_packet_delay_ns)},
         {"grab_timeout_ms", grab_timeout.count()},
         {"retries", capture.retries},
         {"save_frames", optional_json(frames_dir)}}},

@@ -353,7 +353,7 @@ const std::string kProfile = "profile = \"" + kConfig + "/benches/sim.toml\"";
 const std::string kGrid = "kind = \"grid\"\nx_mm = [0, 900, 100]\ny_mm = [140, 160, 10]";
 const std::string kCaptureKeys =
     "camera, calibration, frames_per_position, software_trigger, pixel_format, exposure_us, "
-    "gain, grab_timeout_ms, retries, save_frames";
+    "gain, packet_size, inter_packet_delay_ns, grab_timeout_ms, retries, save_frames";
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, SweepConfigMalformed,
@@ -484,8 +484,16 @@ INSTANTIATE_TEST_SUITE_P(
                 "target.layout = \"" + kConfig + "/targets/none.toml\": ", true},
         BadCase{"bad_pixel_format", "frames_per_position = 3",
                 "frames_per_position = 3\npixel_format = \"RGB8\"",
-                "capture.pixel_format = \"RGB8\": expected \"Mono8\", \"Mono10\", \"Mono12\" or "
-                "\"Mono16\""},
+                "capture.pixel_format = \"RGB8\": expected \"Mono8\", \"Mono10\", \"Mono12\", "
+                "\"Mono12Packed\", \"Mono16\" or \"BayerRG8\""},
+        BadCase{"packet_size_too_large", "frames_per_position = 3",
+                "frames_per_position = 3\npacket_size = 16000",
+                "capture.packet_size = 16000: expected a GigE Vision packet size in bytes, an "
+                "integer 576..9000 (1500 on a standard MTU; more needs jumbo frames)"},
+        BadCase{"negative_inter_packet_delay", "frames_per_position = 3",
+                "frames_per_position = 3\ninter_packet_delay_ns = -5",
+                "capture.inter_packet_delay_ns = -5: expected a GigE Vision inter-packet delay in "
+                "ns, 0..1e8"},
         BadCase{"missing_replay_folder", "camera = \"gige:127.0.0.1\"",
                 "camera = \"replay:frames\"",
                 "capture.camera = \"replay:frames\": {dir}/frames is not a folder; expected "

@@ -18,9 +18,12 @@
 //   calibration = ""            (required) calibration file; "" = the paper's Sony XC-555
 //   frames_per_position = 3     1..1000 (default 3); N > 1 separates jitter from bias
 //   software_trigger = true     default true (one exposure per trigger, after settling)
-//   pixel_format = "Mono8"      Mono8 | Mono10 | Mono12 | Mono16 (default Mono8)
+//   pixel_format = "Mono8"      Mono8 | Mono10 | Mono12 | Mono12Packed | Mono16 | BayerRG8
+//                               (default Mono8; vision/pixel_format.hpp: the conversions)
 //   exposure_us = 10000         > 0; absent keeps the camera's value
 //   gain = 0                    >= 0, camera units (dB); absent keeps the camera's value
+//   packet_size = 1500          GigE GevSCPSPacketSize, bytes, 576..9000; absent keeps the camera's
+//   inter_packet_delay_ns = 0   GigE GevSCPD, ns, 0..1e8; absent keeps the camera's
 //   grab_timeout_ms = 2000      > 0 (default 2000): wait for one frame
 //   retries = 2                 0..100 (default 2): re-triggers after a timeout or an
 //                               incomplete frame before the position is marked failed
