@@ -1,13 +1,12 @@
 #include "report_truth.hpp"
 
-#include <unistd.h>
-
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "commands.hpp"
+#include "config/error.hpp"
+#include "config/reader.hpp"
 #include "db/store/sha256.hpp"
+#include "db/store/stored_file_copy.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "vision/camera.hpp"
 #include "vision/rig_geometry.hpp"
@@ -16,62 +15,30 @@
 namespace rig::cli {
 namespace {
 
-// The bytes of a file the user named, for its SHA-256; BadInput naming the
-// option and the file when it cannot be read.
+// The bytes of a file the user named, for its SHA-256: BadInput naming the
+// option and what the file was to be when it does not exist; read bounded by
+// config::read_text_file (a folder or an oversized file is bad input).
 std::string read_named_file(const std::string& option, const std::string& path) {
+  const std::string what = option == "--geometry"
+                               ? "a rig geometry file (rig.toml, as rig calibrate writes it)"
+                               : "a camera calibration file (OpenCV YAML/XML or ROS camera_info)";
   std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw BadInput(option + " " + path + ": no such file; expected " +
-                   (option == "--geometry" ? "a rig geometry file (rig.toml, as rig calibrate "
-                                             "writes it)"
-                                           : "a camera calibration file (OpenCV YAML/XML or ROS "
-                                             "camera_info)"));
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream bytes;
-  bytes << in.rdbuf();
-  if (!in) throw BadInput(option + " " + path + ": cannot be read");
-  return bytes.str();
+  if (!std::filesystem::exists(path, ec))
+    throw BadInput(option + " " + path + ": no such file; expected " + what);
+  return config::read_text_file(path, option + ", " + what, config::raise_as<config::ConfigError>);
 }
-
-// A stored file of the run, written to a private temporary folder for the
-// loaders that take a path; removed when done.
-class StoredCopy {
- public:
-  StoredCopy(const db::store::StoredFile& file, const std::string& name) {
-    std::string pattern = (std::filesystem::temp_directory_path() / "rig-report-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr)
-      throw std::runtime_error("cannot create a temporary folder for the run's stored " + name);
-    dir_ = pattern;
-    const std::string stem = std::filesystem::path(file.path).filename().string();
-    path_ = (dir_ / (stem.empty() ? name : stem)).string();
-    std::ofstream out(path_, std::ios::binary);
-    out << file.content;
-    if (!out) throw std::runtime_error("cannot write " + path_);
-  }
-  ~StoredCopy() {
-    std::error_code ignored;
-    std::filesystem::remove_all(dir_, ignored);
-  }
-  StoredCopy(const StoredCopy&) = delete;
-  StoredCopy& operator=(const StoredCopy&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::filesystem::path dir_;
-  std::string path_;
-};
 
 vision::Target stored_target(const db::store::Run& run) {
   const db::store::StoredFile& f = run.description.target_layout;
   if (f.content.empty()) return vision::Target::paper_default();
-  const StoredCopy copy(f, "target.toml");
+  const db::store::StoredFileCopy copy(f, "target.toml");
   return vision::Target::load(copy.path());
 }
 
 vision::Camera stored_camera(const db::store::Run& run) {
   const db::store::StoredFile& f = run.description.camera_calibration;
   if (f.content.empty()) return vision::Camera::paper_default();
-  const StoredCopy copy(f, "camera.yaml");
+  const db::store::StoredFileCopy copy(f, "camera.yaml");
   return vision::Camera::load(copy.path());
 }
 

@@ -163,10 +163,8 @@ TEST(CalibrateSimTruth, BeatsOpenCvCalibrateCameraOnTheHiddenTruthData) {
       rig::calibrate::reprojection_rms_px(odd, cv_fit.camera, sweep.problem.nominal_geometry);
   const vision::Camera& truth = sweep.truth.camera;
   const vision::Intrinsics& t = truth.intrinsics();
-  const vision::Intrinsics& a = ours.camera.intrinsics();
-  const vision::Intrinsics& b = cv_fit.camera.intrinsics();
-  const double ours_err[4] = {a.fx - t.fx, a.fy - t.fy, a.cx - t.cx, a.cy - t.cy};
-  const double cv_err[4] = {b.fx - t.fx, b.fy - t.fy, b.cx - t.cx, b.cy - t.cy};
+  const std::array<double, 4> ours_err = rig_test::intrinsics_error_px(ours.camera, t);
+  const std::array<double, 4> cv_err = rig_test::intrinsics_error_px(cv_fit.camera, t);
   std::printf("| figure | `rig calibrate` | `cv::calibrateCamera` (one view per position) |\n");
   std::printf("|---|---|---|\n");
   const char* names[4] = {"fx error, px", "fy error, px", "cx error, px", "cy error, px"};

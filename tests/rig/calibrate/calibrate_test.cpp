@@ -184,10 +184,8 @@ TEST(Calibrate, BeatsOpenCvCalibrateCameraOnTheSameDetections) {
   const double cv_held_out =
       rig::calibrate::reprojection_rms_px(odd, cv_fit.camera, problem.nominal_geometry);
   const vision::Intrinsics t = rig_test::calibration_true_camera().intrinsics();
-  const vision::Intrinsics& a = ours.camera.intrinsics();
-  const vision::Intrinsics& b = cv_fit.camera.intrinsics();
-  const double ours_err[4] = {a.fx - t.fx, a.fy - t.fy, a.cx - t.cx, a.cy - t.cy};
-  const double cv_err[4] = {b.fx - t.fx, b.fy - t.fy, b.cx - t.cx, b.cy - t.cy};
+  const std::array<double, 4> ours_err = rig_test::intrinsics_error_px(ours.camera, t);
+  const std::array<double, 4> cv_err = rig_test::intrinsics_error_px(cv_fit.camera, t);
   std::printf("| figure (fit: even positions) | rig calibrate | cv::calibrateCamera |\n");
   std::printf("|---|---|---|\n");
   const char* names[4] = {"fx error, px", "fy error, px", "cx error, px", "cy error, px"};

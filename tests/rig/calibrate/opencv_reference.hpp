@@ -5,6 +5,8 @@
 // held-out positions is its best case.
 #pragma once
 
+#include <array>
+
 #include "rig/calibrate/calibration.hpp"
 
 namespace rig_test {
@@ -19,5 +21,12 @@ struct OpenCvFit {
 // calibration on one thread (deterministic).
 OpenCvFit opencv_calibrate(const rig::calibrate::CalibrationProblem& fit,
                            const rig::calibrate::CalibrationProblem& held_out);
+
+// fx, fy, cx, cy of `estimate` minus those of `truth`, in pixels.
+inline std::array<double, 4> intrinsics_error_px(const vision::Camera& estimate,
+                                                 const vision::Intrinsics& truth) {
+  const vision::Intrinsics& e = estimate.intrinsics();
+  return {e.fx - truth.fx, e.fy - truth.fy, e.cx - truth.cx, e.cy - truth.cy};
+}
 
 }  // namespace rig_test

@@ -17,6 +17,7 @@
 #include "db/store/store.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "rig_command.hpp"
+#include "store_fixture.hpp"
 
 namespace {
 
@@ -25,26 +26,7 @@ using nlohmann::json;
 using rig_test::RigRun;
 using rig_test::run_rig;
 
-class Scratch {
- public:
-  Scratch() {
-    std::string pattern = (fs::temp_directory_path() / "rig-report-geometry-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~Scratch() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-  std::string write(const std::string& name, const std::string& content) const {
-    std::ofstream(file(name), std::ios::binary) << content;
-    return file(name);
-  }
-
- private:
-  fs::path path_;
-};
+using Scratch = db_test::ScratchDir;
 
 std::string slurp(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
