@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <map>
 
+#include "db/stats/descriptive.hpp"
 #include "opencv_reference.hpp"
 #include "sim_truth_calibration.hpp"
 
@@ -25,15 +26,6 @@ using rig::calibrate::CalibrationOptions;
 using rig::calibrate::CalibrationResult;
 
 constexpr int kSeeds = 10;
-
-double sample_sd(const std::vector<double>& v) {
-  double mean = 0, ss = 0;
-  for (const double x : v)
-    mean += x / static_cast<double>(v.size());
-  for (const double x : v)
-    ss += (x - mean) * (x - mean);
-  return std::sqrt(ss / static_cast<double>(v.size() - 1));
-}
 
 // Errors: fx, fy, scale relative; cx, cy px; pitch, yaw, roll deg (the
 // camera rotation relative to the bench, about the camera axes); distance
@@ -135,9 +127,9 @@ TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
     if (s != stated.end())
       for (const double v : s->second)
         stated_mean += v / kSeeds;
-    const double ratio = stated_mean > 0 ? sample_sd(values) / stated_mean : 0.0;
+    const double ratio = stated_mean > 0 ? db::stats::summarize(values).sd / stated_mean : 0.0;
     std::printf("%-9s mean error %+.3g worst %.3g spread %.3g stated sd %.3g spread/stated %.2f\n",
-                name.c_str(), mean, worst, sample_sd(values), stated_mean, ratio);
+                name.c_str(), mean, worst, db::stats::summarize(values).sd, stated_mean, ratio);
     const auto range = ratio_range.find(name);
     if (range == ratio_range.end()) continue;
     EXPECT_GT(ratio, range->second.first) << name;

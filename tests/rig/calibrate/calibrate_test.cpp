@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <map>
 
+#include "db/stats/descriptive.hpp"
 #include "opencv_reference.hpp"
 #include "rig/calibrate/calibration.hpp"
 #include "store_fixture.hpp"
@@ -44,15 +45,6 @@ CalibrationProblem problem_for(const db_test::ScratchDir& dir, std::uint64_t see
   const std::string db = dir.file("seed" + std::to_string(seed) + ".db");
   const std::int64_t run = rig_test::write_calibration_run(db, spec(seed, std::move(plan)));
   return rig::calibrate::read_run(db, run);
-}
-
-double sample_sd(const std::vector<double>& v) {
-  double mean = 0, ss = 0;
-  for (const double x : v)
-    mean += x / static_cast<double>(v.size());
-  for (const double x : v)
-    ss += (x - mean) * (x - mean);
-  return std::sqrt(ss / static_cast<double>(v.size() - 1));
 }
 
 // Accuracy targets: fx, fy within 0.02 %; cx within 0.2 px; the camera's
@@ -107,7 +99,7 @@ TEST(Calibrate, RecoversTrueCameraAndGeometryOverTenSeeds) {
   // chi2_9 > 36 (4e-5): the brief's factor of 2 is a 99 % interval per
   // parameter; the seeds are fixed, so the outcome is too.
   for (const int i : checked) {
-    const double spread = sample_sd(values[i]);
+    const double spread = db::stats::summarize(values[i]).sd;
     double stated = 0;
     for (const double s : sds[i])
       stated += s / 10.0;
