@@ -364,7 +364,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown_table", "[settle]", "[setle]",
                 "setle = { dwell_ms = 0 }: unknown key (misspelt?); expected one of the tables "
                 "[plan], [capture], [bench], [settle], [faults], [target], [rig], [database], "
-                "[telemetry]"},
+                "[telemetry], [[estimator]]"},
         BadCase{"wrong_type", "frames_per_position = 3", "frames_per_position = \"3\"",
                 "capture.frames_per_position = \"3\": expected an integer in 1..1000"},
         BadCase{"frames_zero", "frames_per_position = 3", "frames_per_position = 0",
