@@ -523,8 +523,7 @@ TEST(SweepConfigEstimators, ShippedExternalSweepRunsTheExampleFromTheRepository)
   ASSERT_EQ(c.estimators.size(), 1u);
   const rig::estimator::EstimatorSpec& e = c.estimators[0];
   EXPECT_EQ(e.solver_name(), "ext:opencv_pnp");
-  EXPECT_EQ(e.command,
-            (std::vector<std::string>{"python3", "../../examples/solvepnp_estimator.py"}));
+  EXPECT_EQ(e.command, (std::vector<std::string>{"../../examples/solvepnp_estimator.py"}));
   EXPECT_EQ(e.working_dir, kConfig + "/sweeps");  // where the relative script path holds
   EXPECT_EQ(e.timeout.count(), 2000);
   EXPECT_EQ(e.startup_timeout.count(), 10000);
