@@ -29,7 +29,7 @@ std::string FrameFolder::write(const cv::Mat& image) {
     folder_ = pattern;
   }
   std::vector<unsigned char> png;
-  if (!cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 1}))
+  if (!cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 0}))
     throw std::runtime_error("cannot encode the frame as PNG for the external estimators");
   const std::filesystem::path file = *folder_ / "frame.png";
   if (::unlink(file.c_str()) == -1 && errno != ENOENT)

@@ -20,8 +20,9 @@ class FrameFolder {
   FrameFolder& operator=(const FrameFolder&) = delete;
 
   // Writes `image` (CV_8UC1 or CV_16UC1, as the camera delivered it) as a
-  // lossless PNG (compression level 1: the fastest; every level is
-  // lossless) to FOLDER/frame.png, replacing the previous frame, and returns
+  // lossless PNG (compression level 0, stored: every level is lossless and
+  // level 0 takes half the CPU time of level 1 at 736x571,
+  // tests/bench/bench_estimator.cpp) to FOLDER/frame.png, replacing the previous frame, and returns
   // its absolute path. The file is created new (O_EXCL, O_NOFOLLOW).
   // Throws std::runtime_error naming the folder or file when it cannot be
   // created, encoded or written.
