@@ -162,6 +162,9 @@ void ChildProcess::stop(Clock::time_point deadline) {
   close_stdin();
   while (pid_ > 0 && !exit_description()) {
     if (Clock::now() >= deadline) {
+      // The whole process group (the child leads its own): whatever it
+      // started goes with it.
+      ::kill(-pid_, SIGKILL);
       ::kill(pid_, SIGKILL);
       int status = 0;
       while (::waitpid(pid_, &status, 0) == -1 && errno == EINTR) {

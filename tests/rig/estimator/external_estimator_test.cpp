@@ -7,12 +7,16 @@
 #include "rig/estimator/external_estimator.hpp"
 
 #include <gtest/gtest.h>
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <thread>
 
 #include "vision/camera.hpp"
 #include "vision/target.hpp"
@@ -136,6 +140,35 @@ TEST_F(ExternalEstimatorTest, HangTimesOutWithinTheFrameTimeoutAndIsKilled) {
   EXPECT_GE(waited, std::chrono::milliseconds(1500));
   EXPECT_LT(waited, std::chrono::milliseconds(3000));
   EXPECT_FALSE(ask(e).failure);
+}
+
+TEST_F(ExternalEstimatorTest, WhatAHungEstimatorStartedIsKilledWithIt) {
+  const std::string pid_file = once_file() + ".pid";
+  ExternalEstimator e(spec({"orphan", "--pid", pid_file}), camera_, target_);
+  const FrameResult r = ask(e);
+  ASSERT_TRUE(r.failure);
+  EXPECT_EQ(r.failure->kind, FailureKind::kTimeout);
+  std::ifstream in(pid_file);
+  pid_t sleeper = 0;
+  ASSERT_TRUE(in >> sleeper);
+  std::filesystem::remove(pid_file);
+  // SIGKILL went to its process group: the orphan is dead at once, a zombie
+  // until init (or a subreaper) reaps it, which a container's init may never
+  // do; dead or zombie is gone. 5 s is generous for the signal on a loaded
+  // machine.
+  const auto dead = [](pid_t pid) {
+    if (::kill(pid, 0) == -1 && errno == ESRCH) return true;
+    std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+    std::string pid_text, comm, state;
+    return stat >> pid_text >> comm >> state && state == "Z";
+  };
+  bool gone = false;
+  for (int i = 0; i < 500 && !gone; ++i) {
+    gone = dead(sleeper);
+    if (!gone) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  if (!gone) ::kill(sleeper, SIGKILL);
+  EXPECT_TRUE(gone) << "pid " << sleeper << " outlived its estimator";
 }
 
 TEST_F(ExternalEstimatorTest, MalformedAnswersAreFailuresNamingTheField) {

@@ -19,6 +19,7 @@ the process) at which to misbehave (default 0).
 import json
 import os
 import signal
+import subprocess
 import sys
 import time
 
@@ -32,6 +33,7 @@ def main():
     mode = sys.argv[1]
     once = sys.argv[sys.argv.index("--once") + 1] if "--once" in sys.argv else None
     at = int(sys.argv[sys.argv.index("--at") + 1]) if "--at" in sys.argv else 0
+    pid_file = sys.argv[sys.argv.index("--pid") + 1] if "--pid" in sys.argv else None
     if once is not None:
         if os.path.exists(once):
             mode = "ok"
@@ -55,6 +57,11 @@ def main():
         if here and mode == "segfault":
             os.kill(os.getpid(), signal.SIGSEGV)
         if here and mode == "hang":
+            time.sleep(3600)
+        if here and mode == "orphan":
+            child = subprocess.Popen(["sleep", "3600"])
+            with open(pid_file, "w") as f:
+                f.write(str(child.pid))
             time.sleep(3600)
         if here and mode == "malformed":
             sys.stdout.write("this is not json\n")

@@ -1,11 +1,13 @@
 // rig::estimator::ChildProcess: one external estimator process, started with
-// fork + execvp (no shell: argv[0] is looked up on PATH, every argument is
-// passed as written), its stdin and stdout connected to rig through pipes,
-// its stderr inherited (an estimator's own messages go where rig's go).
+// posix_spawnp (no shell: argv[0] is looked up on PATH, every argument is
+// passed as written), its stdin (a socket pair) and stdout (a pipe)
+// connected to rig,
+// its stderr inherited (an estimator's own messages go where rig's go), in a
+// process group of its own.
 //
 // Every wait is bounded by a deadline (poll(2)); nothing here blocks for
 // longer than the caller allows, whatever the child does. The destructor
-// kills (SIGKILL) and reaps a child that is still running.
+// kills (SIGKILL) and reaps a child that is still running, with its group.
 #pragma once
 
 #include <sys/types.h>
@@ -63,7 +65,8 @@ class ChildProcess {
   std::string read_line(Clock::time_point deadline, std::size_t max_line_bytes);
 
   // Closes the child's stdin (it sees end of file), waits until `deadline`
-  // for it to exit, then kills it (SIGKILL) and reaps it. Idempotent.
+  // for it to exit, then kills it and its process group (SIGKILL) and reaps
+  // it. Idempotent.
   void stop(Clock::time_point deadline);
 
   // How the child ended, when it has ended (reaped without blocking):
