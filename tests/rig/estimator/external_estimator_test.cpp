@@ -245,6 +245,27 @@ TEST_F(ExternalEstimatorTest, AfterMaxRestartsItIsDisabledWithTheLastReason) {
   EXPECT_TRUE(logged_disabled);
 }
 
+TEST_F(ExternalEstimatorTest, RigsCornersAreSentUnlessSendCornersIsOff) {
+  std::vector<vision::Detection> detections(2);
+  detections[0].id = 0;
+  detections[1].id = 3;
+  FrameRequest request;
+  request.image_path = "/nonexistent/frame.png";
+  request.detections = &detections;
+  ExternalEstimator with(spec({"echo_detections"}), camera_, target_);
+  const FrameResult r = with.estimate(request);
+  ASSERT_FALSE(r.failure) << r.failure->reason;
+  ASSERT_EQ(r.poses.size(), 2u);
+  EXPECT_EQ(r.poses[0].scope, "0");
+  EXPECT_EQ(r.poses[1].scope, "3");
+  EstimatorSpec without_corners = spec({"echo_detections"});
+  without_corners.send_corners = false;
+  ExternalEstimator without(without_corners, camera_, target_);
+  const FrameResult none = without.estimate(request);
+  ASSERT_FALSE(none.failure) << none.failure->reason;
+  EXPECT_TRUE(none.poses.empty());
+}
+
 TEST(EstimatorProtocol, CameraAndTargetAreSentWithUnits) {
   const auto camera =
       nlohmann::json::parse(rig::estimator::camera_json(vision::Camera::paper_default()));

@@ -74,6 +74,9 @@ def main():
         if here and mode == "bad_rotation":
             R = [[2, 0, 0], [0, 1, 0], [0, 0, 1]]
         poses = [] if mode == "no_pose" else [{"scope": "target", "R": R, "t_m": [0, 0, 1.0]}]
+        if mode == "echo_detections":
+            poses = [{"scope": d["marker_id"], "R": R, "t_m": [0, 0, 1.0]}
+                     for d in message.get("detections", [])]
         send({"type": "result", "frame_id": frame_id, "poses": poses, "time_us": 5})
     return 0
 
