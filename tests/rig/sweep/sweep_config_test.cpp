@@ -364,7 +364,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown_table", "[settle]", "[setle]",
                 "setle = { dwell_ms = 0 }: unknown key (misspelt?); expected one of the tables "
                 "[plan], [capture], [bench], [settle], [faults], [target], [rig], [database], "
-                "[telemetry]"},
+                "[telemetry], [[estimator]]"},
         BadCase{"wrong_type", "frames_per_position = 3", "frames_per_position = \"3\"",
                 "capture.frames_per_position = \"3\": expected an integer in 1..1000"},
         BadCase{"frames_zero", "frames_per_position = 3", "frames_per_position = 0",
@@ -520,6 +520,68 @@ TEST(SweepConfigFile, AFolderOrAMissingFileIsRefusedAsTheSweepFile) {
 
 TEST(SweepConfigFile, ItsErrorsAreConfigErrors) {
   EXPECT_THROW(rig::sweep::load_sweep_config("/nonexistent/sweep.toml"), config::ConfigError);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(SweepConfigEstimators, ShippedExternalSweepRunsTheExampleFromTheRepository) {
+  const SweepConfig c = rig::sweep::load_sweep_config(kConfig + "/sweeps/external.toml");
+  ASSERT_EQ(c.estimators.size(), 1u);
+  const rig::estimator::EstimatorSpec& e = c.estimators[0];
+  EXPECT_EQ(e.solver_name(), "ext:opencv_pnp");
+  EXPECT_EQ(e.command, (std::vector<std::string>{"../../examples/solvepnp_estimator.py"}));
+  EXPECT_EQ(e.working_dir, kConfig + "/sweeps");  // where the relative script path holds
+  EXPECT_EQ(e.timeout.count(), 2000);
+  EXPECT_EQ(e.startup_timeout.count(), 10000);
+  EXPECT_EQ(e.max_restarts, 3);
+  EXPECT_TRUE(e.send_corners);
+  EXPECT_EQ(c.to_json()["estimators"][0]["solver"], "ext:opencv_pnp");
+  // No [[estimator]]: none.
+  EXPECT_TRUE(rig::sweep::load_sweep_config(kConfig + "/sweeps/smoke.toml").estimators.empty());
+}
+
+TEST(SweepConfigEstimators, EveryKeyIsCheckedNamingFileKeyAndExpectation) {
+  const fs::path dir = temp_dir("estimators");
+  const std::string file = (dir / "sweep.toml").string();
+  const auto error_of = [&](const std::string& tables) {
+    return load_error(write_file(file, valid_sweep() + "\n" + tables));
+  };
+  const std::string ok = "[[estimator]]\nname = \"a\"\ncommand = [\"python3\"]\n";
+  EXPECT_EQ(error_of(ok), "");
+  EXPECT_EQ(error_of(ok + "[[estimator]]\nname = \"a\"\ncommand = [\"python3\"]\n"),
+            file +
+                ": estimator[1].name = \"a\": used twice; expected a name no other "
+                "[[estimator]] has");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a b\"\ncommand = [\"python3\"]\n"),
+            file +
+                ": estimator[0].name = \"a b\": expected a name of 1..64 characters A-Z a-z "
+                "0-9 _ . -");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\n"),
+            file +
+                ": estimator[0].command: missing; expected the command as an array of 1..256 "
+                "strings, program first");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\ncommand = \"python3 x.py\"\n"),
+            file +
+                ": estimator[0].command = \"python3 x.py\": expected the command as an array "
+                "of 1..256 strings, program first");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\ncommand = [\"no-such-estimator-program\"]\n"),
+            file +
+                ": estimator[0].command = [\"no-such-estimator-program\"]: "
+                "\"no-such-estimator-program\" is not an executable file on PATH; expected "
+                "the command as an array of 1..256 strings, program first");
+  EXPECT_NE(
+      error_of("[[estimator]]\nname = \"a\"\ncommand = [\"./missing.py\"]\n")
+          .find("\"./missing.py\" is not an executable file (relative to " + dir.string() + ")"),
+      std::string::npos);
+  EXPECT_EQ(error_of(ok + "timeout_ms = 0\n"),
+            file + ": estimator[0].timeout_ms = 0: expected an integer in 1..600000");
+  EXPECT_EQ(error_of(ok + "max_restarts = -1\n"),
+            file + ": estimator[0].max_restarts = -1: expected an integer in 0..1000");
+  EXPECT_NE(error_of(ok + "timout_ms = 5\n").find("estimator[0].timout_ms = 5: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("[estimator]\nname = \"a\"\n").find("estimator"), std::string::npos);
 }
 
 }  // namespace
