@@ -310,6 +310,13 @@ class PositionMeasurer {
     rec.true_viewing_angle_deg = truth.viewing_angle_deg;
     rec.visible_markers = truth.visible_markers;
     rec.distance_bounds = truth.distance_bounds;
+    db::store::TruePose pose;
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j)
+        pose.R_cam_target[3 * i + j] = truth.T_cam_target.R(i, j);
+      pose.t_cam_target_m[i] = truth.T_cam_target.t(i);
+    }
+    rec.true_pose = pose;
   }
 
   // Detection and every solver on each frame, with the detect and solve stage times.
