@@ -33,6 +33,12 @@ struct EstimateSample {
   double generalization_px = kNaN;  // NaN: absent
   double time_us = kNaN;
   double ambiguity_ratio = kNaN;  // NaN: absent
+  // Against the position's true pose (store::TruePose), converged estimates
+  // only, NaN when the truth was not recorded: the translation error
+  // t_est - t_true per axis of the camera frame (m) and the rotation error,
+  // the angle of R_est^T R_true (degrees, [0, 180]).
+  double error_x_m = kNaN, error_y_m = kNaN, error_z_m = kNaN;
+  double rotation_error_deg = kNaN;
 };
 
 // The estimates of one solver on one scope, in plan index then frame order.

@@ -98,6 +98,8 @@ Section overview(const ReportInput& in) {
   row("estimates", std::to_string(s.estimates));
   row("solver x scope combinations", std::to_string(s.solvers.size()));
   row("viewing angles", s.viewing_angles_recorded ? "recorded" : "not recorded");
+  row("true poses (per-axis and rotation errors)",
+      s.true_poses_recorded ? "recorded" : "not recorded (runs before schema 4)");
   row("Cramér-Rao distance bounds", s.distance_bounds_recorded ? "recorded" : "not recorded");
   row("visible markers", s.visible_markers_recorded ? "recorded" : "not recorded");
   row("detections with a non-finite corner or edge residual (not used)",

@@ -16,6 +16,13 @@ json to_json(const stats::Summary& s) {
           {"sd", s.sd},       {"min", s.min},   {"max", s.max}};
 }
 
+// A summary of values in degrees, in radians (report.json keeps SI).
+json radians_json(const stats::Summary& deg) {
+  constexpr double k = M_PI / 180.0;
+  return {{"count", deg.count}, {"mean", deg.mean * k}, {"variance", deg.variance * k * k},
+          {"sd", deg.sd * k},   {"min", deg.min * k},   {"max", deg.max * k}};
+}
+
 json camera_json(const store::Run& run) {
   if (!run.camera) return nullptr;
   const store::RunCamera& c = *run.camera;
@@ -90,6 +97,12 @@ json to_json(const SolverStudy& s) {
                        {"bias_m", c.bias_m},
                        {"bias_sd_m", c.bias_sd_m},
                        {"efficiency", c.efficiency},
+                       {"efficiency_below_bound", efficiency_below_bound(c)},
+                       {"pose_error",
+                        {{"x_m", to_json(c.error_x_m)},
+                         {"y_m", to_json(c.error_y_m)},
+                         {"z_m", to_json(c.error_z_m)},
+                         {"rotation_rad", radians_json(c.rotation_error_deg)}}},
                        {"ambiguity_checked", c.ambiguity_checked},
                        {"ambiguous", c.ambiguous},
                        {"flip_checked", c.flip_checked},
@@ -163,6 +176,7 @@ json to_json(const RunStudy& st) {
           {"frames", st.frames},
           {"estimates", st.estimates},
           {"viewing_angles_recorded", st.viewing_angles_recorded},
+          {"true_poses_recorded", st.true_poses_recorded},
           {"distance_bounds_recorded", st.distance_bounds_recorded},
           {"visible_markers_recorded", st.visible_markers_recorded},
           {"nonfinite_detections", st.nonfinite_detections},

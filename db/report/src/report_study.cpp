@@ -80,6 +80,7 @@ struct PositionGroup {
 // Accumulators of one distance class.
 struct ClassAccumulator {
   stats::RunningSummary error, reprojection, generalization, bias;
+  stats::RunningSummary error_x, error_y, error_z, rotation_error;  // against the true pose
   Pooled jitter;
   double bound_sum_squares = 0;  // sum (n_p - 1) sigma^2 b_p^2
   double bound_dof = 0;          // dof of the positions that have a bound
@@ -201,6 +202,12 @@ void add_used_estimate(const EstimateSample& e, double truth,
     a.error.add(err);
     a.reprojection.add(e.reprojection_px);
     if (has_generalization) a.generalization.add(e.generalization_px);
+    if (!std::isnan(e.rotation_error_deg)) {
+      a.error_x.add(e.error_x_m);
+      a.error_y.add(e.error_y_m);
+      a.error_z.add(e.error_z_m);
+      a.rotation_error.add(e.rotation_error_deg);
+    }
   }
 }
 
@@ -307,6 +314,10 @@ void finish_classes(const std::vector<ClassAccumulator>& acc,
     c.error_m = a.error.summary();
     c.reprojection_px = a.reprojection.summary();
     c.generalization_px = a.generalization.summary();
+    c.error_x_m = a.error_x.summary();
+    c.error_y_m = a.error_y.summary();
+    c.error_z_m = a.error_z.summary();
+    c.rotation_error_deg = a.rotation_error.summary();
     const stats::Summary bias = a.bias.summary();
     c.positions = bias.count;
     c.bias_m = bias.mean;
@@ -484,6 +495,7 @@ void count_positions(const RunData& data, RunStudy& study) {
     study.visible_markers_recorded |= !p.record.visible_markers.empty();
     study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
     study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
+    study.true_poses_recorded |= p.record.true_pose.has_value();
     if (p.record.status == store::PositionStatus::kOk &&
         (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
       ++study.positions_outside_classes;

@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -118,7 +119,28 @@ struct DistanceClassStudy {
   double efficiency = 0;
   std::size_t ambiguity_checked = 0, ambiguous = 0;  // converged estimates with an ambiguity ratio
   std::size_t flip_checked = 0, flips = 0;           // frames with both scopes (scope "0" only)
+  // The full pose against the position's true pose (positions that recorded
+  // it, schema 4 on; count 0 otherwise), every used estimate: translation
+  // error t_est - t_true per axis of the camera frame (x right, y down, z
+  // along the optical axis; m) and rotation error, the angle of
+  // R_est^T R_true (degrees).
+  stats::Summary error_x_m, error_y_m, error_z_m, rotation_error_deg;
 };
+
+// The bound behind `efficiency` assumes corner errors independent between
+// corners and coordinates (the stored bound is sigma (J^T J)^-1 per px; the
+// database keeps neither J nor the corners' error covariance, so the bound
+// under correlated errors cannot be computed from it). No unbiased solver
+// goes below the true bound: a ratio below 1 says the assumption fails in
+// that class, not that the solver beat the bound.
+inline bool efficiency_below_bound(const DistanceClassStudy& c) {
+  return c.efficiency < 1.0;  // false for NaN
+}
+// The efficiency a figure may draw as the solver's point: NaN where it is
+// below the bound (efficiency_below_bound) or unknown.
+inline double efficiency_drawn(const DistanceClassStudy& c) {
+  return c.efficiency >= 1.0 ? c.efficiency : std::numeric_limits<double>::quiet_NaN();
+}
 
 // Counts by viewing-angle class, for ambiguity and flips.
 struct AngleClassStudy {
@@ -254,6 +276,7 @@ struct RunStudy {
   std::size_t nonfinite_detections = 0, nonfinite_visible_markers = 0;
   bool distance_bounds_recorded = false;
   bool viewing_angles_recorded = false;
+  bool true_poses_recorded = false;  // positions with a true pose (schema 4 on)
   std::vector<StageStudy> stages;
   std::vector<store::RunEvent> events;
   ReportOptions options;
