@@ -238,6 +238,7 @@ void add_efficiency_figure(const ReportInput& in, const std::string& scope, Sect
       }
     }
   }
+  std::sort(fails.x.begin(), fails.x.end());
   if (!fails.x.empty()) f.series.push_back(std::move(fails));
   sec.figure(std::move(f));
 }

@@ -188,7 +188,11 @@ TEST(StoreSchema, MigratesAVersion2FileWhoseRunsHaveNoCamera) {
     db::store::Store store(path);
     store.start_run(db_test::make_run_description(4));
   }
-  RawDb(path).exec("DROP TABLE run_camera; PRAGMA user_version = 2");
+  {
+    RawDb raw(path);
+    raw.exec("DROP TABLE run_camera; PRAGMA user_version = 2");
+    drop_true_pose_columns(raw);
+  }
   db::store::Store store(path);
   EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
             std::to_string(db::store::Store::kSchemaVersion));
