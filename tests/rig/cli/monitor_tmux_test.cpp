@@ -62,9 +62,11 @@ class Tmux {
 
   // A detached session `name` of kColumns x kRows running `command`; the pane
   // stays open after the command (its exit status printed below the last
-  // screen), so that the final screen can be captured.
+  // screen, without a newline: one on the last row would scroll the screen),
+  // so that the final screen can be captured.
   void start(const std::string& name, const std::string& command) const {
-    const std::string script = command + "; echo \"monitor exit status $?\"; exec cat >/dev/null";
+    const std::string script =
+        command + "; printf \"monitor exit status %s\" $?; exec cat >/dev/null";
     int status = 0;
     const std::string out =
         run("new-session -d -s " + name + " -x " + std::to_string(kColumns) + " -y " +
