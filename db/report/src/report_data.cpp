@@ -388,6 +388,7 @@ void read_estimates(store::sqlite::Connection& connection, std::int64_t id, cons
     scope = select.get_text(estimate_column::kScope);
     SolverScopeData& target = pass.data_of(solver, scope);
     EstimateSample s = sample_of(select, pass.slot());
+    s.frame = static_cast<std::uint32_t>(select.get_int64(estimate_column::kFrameIndex));
     s.status = status_of(select, s, target.failures_by_termination);
     if (s.status == SampleStatus::kConverged) {
       pass.keep_rotation(select, solver, scope);

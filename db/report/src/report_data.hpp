@@ -27,6 +27,7 @@ enum class SampleStatus : std::uint8_t { kConverged, kSkipped, kFailed };
 // One estimate, without its pose: position is the index into RunData::positions.
 struct EstimateSample {
   std::uint32_t position = 0;
+  std::uint32_t frame = 0;  // the frame's index at its position
   SampleStatus status = SampleStatus::kConverged;
   double distance_m = kNaN;
   double reprojection_px = kNaN;

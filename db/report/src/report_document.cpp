@@ -124,6 +124,33 @@ Section overview(const ReportInput& in) {
 
 }  // namespace
 
+namespace {
+
+// Pictures of frames with the detections drawn, when the caller drew them
+// from saved frames; else how to get them.
+Section frames_section(const ReportInput& in) {
+  Section sec{"frames", "Frames", {}};
+  if (in.pictures.empty()) {
+    sec.paragraph(
+        "No pictures of frames: the run saved none ([capture] save_frames in the sweep file, "
+        "docs/sweep-file.md), or they are no longer where it saved them.");
+    return sec;
+  }
+  sec.paragraph(
+      "A few frames per distance class and each solver's worst frame (pose marker), scaled "
+      "down, with the detected corners A-D and marker ids drawn where the detections stored "
+      "in the database put them.");
+  for (const FramePicture& p : in.pictures) {
+    Block b;
+    b.kind = Block::Kind::kPicture;
+    b.picture = &p;
+    sec.blocks.push_back(std::move(b));
+  }
+  return sec;
+}
+
+}  // namespace
+
 Document build_document(const ReportInput& in) {
   Document doc;
   doc.title = "rig report: run " + std::to_string(in.study.run.id);
@@ -155,6 +182,7 @@ Document build_document(const ReportInput& in) {
   add_beyond_tables(in, beyond);
   add_beyond_figures(in, beyond);
   doc.sections.push_back(std::move(beyond));
+  doc.sections.push_back(frames_section(in));
   return doc;
 }
 

@@ -263,6 +263,16 @@ std::string render_json(const Document& document, const ReportInput& in) {
     header.push_back({term, value});
   root["header"] = header;
   root["figures"] = figures;
+  json pictures = json::array();
+  for (const FramePicture& p : in.pictures)
+    pictures.push_back({{"plan_index", p.frame.plan_index},
+                        {"frame_index", p.frame.frame_index},
+                        {"reason", p.frame.reason},
+                        {"width_px", p.width},
+                        {"height_px", p.height},
+                        {"scale", p.scale},
+                        {"drawn", p.drawn}});
+  root["pictures"] = pictures;
   root["tables"] = tables;
   return root.dump(1);
 }

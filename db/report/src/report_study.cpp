@@ -259,6 +259,12 @@ void add_estimates(const RunData& data, const SolverScopeData& rows, const Posit
     }
     ++s.used;
     add_used_estimate(e, *p.true_distance_m, distance_class, acc);
+    const double abs_error = std::fabs(e.distance_m - *p.true_distance_m);
+    if (s.worst_plan_index < 0 || abs_error > s.worst_abs_error_m) {
+      s.worst_plan_index = p.plan_index;
+      s.worst_frame_index = static_cast<int>(e.frame);
+      s.worst_abs_error_m = abs_error;
+    }
   }
 }
 
@@ -489,6 +495,7 @@ std::vector<MissedMarker> study_missed_markers(const RunData& data) {
 void count_positions(const RunData& data, RunStudy& study) {
   study.positions = data.positions.size();
   const stats::EqualWidthBins bins = distance_classes();
+  study.class_example_positions.assign(bins.count(), {});
   for (const PositionData& p : data.positions) {
     study.failed_positions += p.record.status == store::PositionStatus::kFailed ? 1 : 0;
     study.frames += p.frames;
@@ -496,6 +503,11 @@ void count_positions(const RunData& data, RunStudy& study) {
     study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
     study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
     study.true_poses_recorded |= p.record.true_pose.has_value();
+    if (p.frames > 0 && p.record.true_distance_m) {
+      const auto c = distance_class(bins, *p.record.true_distance_m);
+      if (c && study.class_example_positions[*c].size() < 4)
+        study.class_example_positions[*c].push_back(p.record.plan_index);
+    }
     if (p.record.status == store::PositionStatus::kOk &&
         (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
       ++study.positions_outside_classes;

@@ -32,6 +32,7 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "db/stats/compare.hpp"
@@ -195,6 +196,11 @@ struct SolverStudy {
   std::string coincides_with;
   // Fig. 12: per-position mean estimated against true distance (thinned).
   std::vector<double> plot_true_m, plot_estimated_m;
+  // The used estimate farthest from the true distance: its position's plan
+  // index and its frame (-1: none used), and |estimated - true|, m.
+  std::int64_t worst_plan_index = -1;
+  int worst_frame_index = -1;
+  double worst_abs_error_m = 0;
 };
 
 // Corner noise per distance class: pooled within-position standard
@@ -277,6 +283,9 @@ struct RunStudy {
   bool distance_bounds_recorded = false;
   bool viewing_angles_recorded = false;
   bool true_poses_recorded = false;  // positions with a true pose (schema 4 on)
+  // Per distance class, the plan indices of its first positions with frames
+  // (at most 4), for pictures.
+  std::vector<std::vector<std::int64_t>> class_example_positions;
   std::vector<StageStudy> stages;
   std::vector<store::RunEvent> events;
   ReportOptions options;
@@ -350,6 +359,24 @@ struct ReportFiles {
   std::vector<std::string> csv;
 };
 
+// A frame the report shows as a picture, and why (Report::frames_to_show).
+struct FrameToShow {
+  std::int64_t plan_index = 0;
+  int frame_index = 0;
+  std::string reason;  // e.g. "class 0.10-0.19 m", "worst of hybrid_ekf (scope 0): +2.31 mm"
+};
+
+// A frame drawn for the page by the caller (db knows no image format): PNG
+// bytes of width x height px, the frame scaled by `scale` (picture px per
+// frame px) with the detections drawn, and what was drawn, for the caption.
+struct FramePicture {
+  FrameToShow frame;
+  std::string png;
+  int width = 0, height = 0;
+  double scale = 1;
+  std::string drawn;  // e.g. "4 markers detected: corners and ids in orange"
+};
+
 class Report {
  public:
   // Computes the study of `database` (see study_run); with a baseline, also
@@ -372,7 +399,17 @@ class Report {
   // when one cannot be written.
   ReportFiles write(const std::string& out_dir) const;
 
+  // The frames worth a picture: the first `per_class` stored positions with
+  // frames of each distance class (their frame 0) and, per solver of the
+  // pose marker's scope, the frame of its worst used estimate; each frame
+  // once, by plan index.
+  std::vector<FrameToShow> frames_to_show(std::size_t per_class = 2) const;
+  // The pictures write() puts on the page (section "frames") and lists in
+  // report.json. Without any, the page says how to get them.
+  void set_pictures(std::vector<FramePicture> pictures) { pictures_ = std::move(pictures); }
+
  private:
+  std::vector<FramePicture> pictures_;
   RunStudy study_;
   std::optional<RunStudy> baseline_;
   std::vector<ComparedFigure> comparison_;
