@@ -73,6 +73,11 @@ inline db::store::PositionRecord make_position(std::int64_t plan_index, int fram
   p.stage_times = {{"move", 0.5 + k}, {"settle", 0.1}, {"capture", 0.03}, {"store", 1e-3}};
   p.true_viewing_angle_deg = 3.0 + 0.01 * k;
   p.distance_bounds = {{"0", 2e-4 + 1e-6 * k}, {"target", 5e-5}};
+  db::store::TruePose pose;
+  for (int r = 0; r < 9; ++r)
+    pose.R_cam_target[r] = std::cos(k + r);
+  pose.t_cam_target_m = {0.003 * k, -0.01, 0.5 + 0.001 * k};
+  p.true_pose = pose;
   for (int m = 0; m < markers; ++m)
     p.visible_markers.push_back({m, 40.0 + m + k / 3.0});
   for (int f = 0; f < frames; ++f) {

@@ -109,6 +109,11 @@ void add_physics(const SyntheticRunSpec& spec, double side_px, db::store::Positi
   const double d = *p.true_distance_m;
   p.true_viewing_angle_deg = 60.0 * std::fmod(0.37 * i, 1.0);
   p.distance_bounds = {{"0", synthetic_bound(spec, d)}, {"target", 0.5 * synthetic_bound(spec, d)}};
+  // The target straight ahead: the estimates' pose (add_estimates) is
+  // identity and (0, 0, estimated distance), so the z error is the distance
+  // error, x and y errors are 0 and the rotation error is 0 (60 degrees on a
+  // flipped frame).
+  p.true_pose = db::store::TruePose{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {0, 0, d}};
   for (int m = 0; m < 4; ++m) {
     const bool planted = spec.plant_nonfinite_detection && i == 1 && m == 2;
     p.visible_markers.push_back({m, planted ? HUGE_VAL : side_px});

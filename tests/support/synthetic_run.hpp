@@ -61,7 +61,7 @@ struct SyntheticRunSpec {
   // m (so the detection rate falls for the smallest markers).
   double marker3_lost_beyond_m = 0.8;
   // false: write positions as a schema-1 writer would have (no viewing angle,
-  // bounds or visible markers).
+  // bounds, visible markers or true pose).
   bool record_physics = true;
   // A detector bug: marker 1's detection in frame 0 of plan index 0 gets an
   // infinite corner coordinate, and marker 2's visible side at plan index 1

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -31,6 +32,9 @@ nav.toc ol { margin: 0.2rem 0; padding-left: 1.4rem; }
 a { color: #0b5394; }
 figure.plot { margin: 1.5rem 0; }
 figure.plot svg { display: block; max-width: 100%; height: auto; }
+figure.frame { display: inline-block; vertical-align: top; margin: 0.5rem 1rem 0.5rem 0; max-width: 100%; }
+figure.frame img { display: block; max-width: 100%; height: auto; }
+figure.frame figcaption { max-width: 24rem; }
 figcaption { font-size: 0.92rem; color: #333; margin-top: 0.4rem; max-width: 60rem; }
 table { border-collapse: collapse; margin: 1rem 0 1.5rem; font-size: 0.92rem; }
 caption { caption-side: top; text-align: left; font-weight: bold; padding-bottom: 0.3rem; }
@@ -211,6 +215,40 @@ void Page::figure(const svg::Figure& f) {
   if (!f.caption.empty()) body_ += "<figcaption>" + escape(f.caption) + "</figcaption>\n";
   body_ += "</figure>\n";
   ++figure_count_;
+}
+
+namespace {
+
+// RFC 4648 base64, with padding.
+std::string base64(const std::string& bytes) {
+  static const char* const kAlphabet =
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+  std::string out;
+  out.reserve((bytes.size() + 2) / 3 * 4);
+  for (std::size_t i = 0; i < bytes.size(); i += 3) {
+    const std::size_t n = std::min<std::size_t>(3, bytes.size() - i);
+    std::uint32_t v = 0;
+    for (std::size_t k = 0; k < 3; ++k)
+      v = (v << 8) | (k < n ? static_cast<unsigned char>(bytes[i + k]) : 0u);
+    for (std::size_t k = 0; k < 4; ++k)
+      out += k <= n ? kAlphabet[(v >> (18 - 6 * k)) & 0x3F] : '=';
+  }
+  return out;
+}
+
+}  // namespace
+
+void Page::picture(const std::string& id, const std::string& png, int width, int height,
+                   const std::string& alt, const std::string& caption) {
+  if (width < 1 || height < 1)
+    throw std::invalid_argument("html::Page::picture " + id + ": size " + std::to_string(width) +
+                                " x " + std::to_string(height) + " px; expected at least 1 x 1");
+  claim_id(id, "picture");
+  body_ += "<figure class=\"frame\" id=\"" + id + "\"><img src=\"data:image/png;base64," +
+           base64(png) + "\" width=\"" + std::to_string(width) + "\" height=\"" +
+           std::to_string(height) + "\" alt=\"" + escape(alt) + "\">\n";
+  if (!caption.empty()) body_ += "<figcaption>" + escape(caption) + "</figcaption>\n";
+  body_ += "</figure>\n";
 }
 
 void Page::begin_section(const std::string& id, const std::string& title) {

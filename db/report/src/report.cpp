@@ -1,7 +1,9 @@
 // db::report::Report: study, comparison and the three outputs (see db/report/report.hpp).
 #include "db/report/report.hpp"
 
+#include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 
@@ -9,6 +11,7 @@
 #include "report_data.hpp"
 #include "report_document.hpp"
 #include "report_study.hpp"
+#include "report_units.hpp"
 
 namespace db::report {
 
@@ -52,6 +55,7 @@ void replace_truth(const RecomputedTruth& truth, RunData& data) {
     r.true_viewing_angle_deg = t.true_viewing_angle_deg;
     r.distance_bounds = t.distance_bounds;
     r.visible_markers = t.visible_markers;
+    r.true_pose = t.true_pose;
   }
 }
 
@@ -99,6 +103,46 @@ Report::Report(const std::string& database, const ReportOptions& options,
   }
 }
 
+namespace {
+
+std::string class_text(double lower_m, double upper_m) {
+  char text[48];
+  std::snprintf(text, sizeof text, "%.2f-%.2f m", lower_m, upper_m);
+  return text;
+}
+
+}  // namespace
+
+std::vector<FrameToShow> Report::frames_to_show(std::size_t per_class) const {
+  std::vector<FrameToShow> out;
+  auto add = [&out](std::int64_t plan_index, int frame_index, const std::string& reason) {
+    for (FrameToShow& f : out) {
+      if (f.plan_index == plan_index && f.frame_index == frame_index) {
+        f.reason += "; " + reason;
+        return;
+      }
+    }
+    out.push_back({plan_index, frame_index, reason});
+  };
+  const stats::EqualWidthBins bins = distance_classes();
+  for (std::size_t c = 0; c < study_.class_example_positions.size(); ++c) {
+    const auto& examples = study_.class_example_positions[c];
+    for (std::size_t k = 0; k < std::min(per_class, examples.size()); ++k)
+      add(examples[k], 0, "class " + class_text(bins.edge(c), bins.edge(c + 1)));
+  }
+  for (const SolverStudy& s : study_.solvers) {
+    if (s.scope == "target" || s.worst_plan_index < 0 || !s.coincides_with.empty()) continue;
+    add(s.worst_plan_index, s.worst_frame_index,
+        "worst of " + s.solver + " (scope " + s.scope + "): |error| " +
+            length_text(s.worst_abs_error_m));
+  }
+  std::sort(out.begin(), out.end(), [](const FrameToShow& a, const FrameToShow& b) {
+    return std::make_pair(a.plan_index, a.frame_index) <
+           std::make_pair(b.plan_index, b.frame_index);
+  });
+  return out;
+}
+
 bool Report::regressed() const {
   return db::report::regressed(comparison_);
 }
@@ -122,7 +166,7 @@ ReportFiles Report::write(const std::string& out_dir) const {
     throw std::runtime_error(out_dir + ": cannot create the output directory" +
                              (ec ? " (" + ec.message() + ")" : std::string()));
   }
-  const report::ReportInput input{study_, baseline_, comparison_};
+  const report::ReportInput input{study_, baseline_, comparison_, pictures_};
   const report::Document document = report::build_document(input);
   ReportFiles files;
   files.html = (dir / "report.html").string();

@@ -15,7 +15,8 @@ namespace db::report {
 const char* const kEstimatesQuery =
     "SELECT p.plan_index, f.frame_index, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
     "e.r12, e.r20, e.r21, e.r22, e.distance_m, e.reprojection_error_px, "
-    "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio "
+    "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio, "
+    "e.tx_m, e.ty_m, e.tz_m "
     "FROM positions p JOIN frames f ON f.position_id = p.id "
     "JOIN estimates e ON e.frame_id = f.id "
     "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
@@ -244,6 +245,7 @@ enum : int {
   kTermination = 17,
   kTime = 18,
   kAmbiguity = 19,
+  kTranslation = 20,  // tx, ty, tz: columns 20 .. 22
 };
 }  // namespace estimate_column
 
@@ -273,6 +275,18 @@ EstimateSample sample_of(const store::sqlite::Statement& row, std::uint32_t slot
   if (!std::isfinite(s.time_us)) s.time_us = kNaN;
   if (!std::isfinite(s.ambiguity_ratio)) s.ambiguity_ratio = kNaN;
   return s;
+}
+
+// A converged estimate against its position's true pose (EstimateSample).
+void add_pose_errors(const store::sqlite::Statement& row, const store::TruePose& truth,
+                     EstimateSample& s) {
+  std::array<double, 9> R{};
+  for (int k = 0; k < 9; ++k)
+    R[k] = row.get_double(estimate_column::kRotation + k);
+  s.error_x_m = row.get_double(estimate_column::kTranslation) - truth.t_cam_target_m[0];
+  s.error_y_m = row.get_double(estimate_column::kTranslation + 1) - truth.t_cam_target_m[1];
+  s.error_z_m = row.get_double(estimate_column::kTranslation + 2) - truth.t_cam_target_m[2];
+  s.rotation_error_deg = rotation_angle_deg(R, truth.R_cam_target);
 }
 
 // Converged, skipped (solver not applicable) or failed; a failure is counted
@@ -374,8 +388,13 @@ void read_estimates(store::sqlite::Connection& connection, std::int64_t id, cons
     scope = select.get_text(estimate_column::kScope);
     SolverScopeData& target = pass.data_of(solver, scope);
     EstimateSample s = sample_of(select, pass.slot());
+    s.frame = static_cast<std::uint32_t>(select.get_int64(estimate_column::kFrameIndex));
     s.status = status_of(select, s, target.failures_by_termination);
-    if (s.status == SampleStatus::kConverged) pass.keep_rotation(select, solver, scope);
+    if (s.status == SampleStatus::kConverged) {
+      pass.keep_rotation(select, solver, scope);
+      const auto& truth = data.positions[s.position].record.true_pose;
+      if (truth) add_pose_errors(select, *truth, s);
+    }
     target.samples.push_back(s);
   }
   pass.finish();

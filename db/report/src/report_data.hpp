@@ -27,12 +27,19 @@ enum class SampleStatus : std::uint8_t { kConverged, kSkipped, kFailed };
 // One estimate, without its pose: position is the index into RunData::positions.
 struct EstimateSample {
   std::uint32_t position = 0;
+  std::uint32_t frame = 0;  // the frame's index at its position
   SampleStatus status = SampleStatus::kConverged;
   double distance_m = kNaN;
   double reprojection_px = kNaN;
   double generalization_px = kNaN;  // NaN: absent
   double time_us = kNaN;
   double ambiguity_ratio = kNaN;  // NaN: absent
+  // Against the position's true pose (store::TruePose), converged estimates
+  // only, NaN when the truth was not recorded: the translation error
+  // t_est - t_true per axis of the camera frame (m) and the rotation error,
+  // the angle of R_est^T R_true (degrees, [0, 180]).
+  double error_x_m = kNaN, error_y_m = kNaN, error_z_m = kNaN;
+  double rotation_error_deg = kNaN;
 };
 
 // The estimates of one solver on one scope, in plan index then frame order.

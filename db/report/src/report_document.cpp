@@ -98,6 +98,8 @@ Section overview(const ReportInput& in) {
   row("estimates", std::to_string(s.estimates));
   row("solver x scope combinations", std::to_string(s.solvers.size()));
   row("viewing angles", s.viewing_angles_recorded ? "recorded" : "not recorded");
+  row("true poses (per-axis and rotation errors)",
+      s.true_poses_recorded ? "recorded" : "not recorded (runs before schema 4)");
   row("Cramér-Rao distance bounds", s.distance_bounds_recorded ? "recorded" : "not recorded");
   row("visible markers", s.visible_markers_recorded ? "recorded" : "not recorded");
   row("detections with a non-finite corner or edge residual (not used)",
@@ -117,6 +119,33 @@ Section overview(const ReportInput& in) {
       "Distance error = estimated - true distance. Skipped estimates (a solver not applicable to "
       "the scope) are counted but excluded from every accuracy figure, as are estimates that did "
       "not converge.");
+  return sec;
+}
+
+}  // namespace
+
+namespace {
+
+// Pictures of frames with the detections drawn, when the caller drew them
+// from saved frames; else how to get them.
+Section frames_section(const ReportInput& in) {
+  Section sec{"frames", "Frames", {}};
+  if (in.pictures.empty()) {
+    sec.paragraph(
+        "No pictures of frames: the run saved none ([capture] save_frames in the sweep file, "
+        "docs/sweep-file.md), or they are no longer where it saved them.");
+    return sec;
+  }
+  sec.paragraph(
+      "A few frames per distance class and each solver's worst frame (pose marker), scaled "
+      "down, with the detected corners A-D and marker ids drawn where the detections stored "
+      "in the database put them.");
+  for (const FramePicture& p : in.pictures) {
+    Block b;
+    b.kind = Block::Kind::kPicture;
+    b.picture = &p;
+    sec.blocks.push_back(std::move(b));
+  }
   return sec;
 }
 
@@ -153,6 +182,7 @@ Document build_document(const ReportInput& in) {
   add_beyond_tables(in, beyond);
   add_beyond_figures(in, beyond);
   doc.sections.push_back(std::move(beyond));
+  doc.sections.push_back(frames_section(in));
   return doc;
 }
 

@@ -18,11 +18,12 @@
 namespace db::report {
 
 struct Block {
-  enum class Kind { kParagraph, kTable, kFigure, kFacts } kind = Kind::kParagraph;
+  enum class Kind { kParagraph, kTable, kFigure, kFacts, kPicture } kind = Kind::kParagraph;
   std::string text;
   std::vector<std::pair<std::string, std::string>> facts;  // term, value
   html::Table table;
   svg::Figure figure;
+  const FramePicture* picture = nullptr;  // kPicture: one of ReportInput::pictures
 };
 
 struct Section {
@@ -46,6 +47,7 @@ struct ReportInput {
   const RunStudy& study;
   const std::optional<RunStudy>& baseline;
   const std::vector<ComparedFigure>& comparison;
+  const std::vector<FramePicture>& pictures;
 };
 
 Document build_document(const ReportInput& input);

@@ -38,6 +38,16 @@ std::string render_html(const Document& document) {
         case Block::Kind::kFigure:
           page.figure(b.figure);
           break;
+        case Block::Kind::kPicture: {
+          const FramePicture& p = *b.picture;
+          const std::string where = "plan index " + std::to_string(p.frame.plan_index) +
+                                    ", frame " + std::to_string(p.frame.frame_index);
+          page.picture("frame-p" + std::to_string(p.frame.plan_index) + "-f" +
+                           std::to_string(p.frame.frame_index),
+                       p.png, p.width, p.height, where,
+                       where + ": " + p.frame.reason + ". " + p.drawn);
+          break;
+        }
       }
     }
     page.end_section();

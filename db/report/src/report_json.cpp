@@ -16,6 +16,13 @@ json to_json(const stats::Summary& s) {
           {"sd", s.sd},       {"min", s.min},   {"max", s.max}};
 }
 
+// A summary of values in degrees, in radians (report.json keeps SI).
+json radians_json(const stats::Summary& deg) {
+  constexpr double k = M_PI / 180.0;
+  return {{"count", deg.count}, {"mean", deg.mean * k}, {"variance", deg.variance * k * k},
+          {"sd", deg.sd * k},   {"min", deg.min * k},   {"max", deg.max * k}};
+}
+
 json camera_json(const store::Run& run) {
   if (!run.camera) return nullptr;
   const store::RunCamera& c = *run.camera;
@@ -100,6 +107,12 @@ json to_json(const SolverStudy& s) {
                        {"bias_m", c.bias_m},
                        {"bias_sd_m", c.bias_sd_m},
                        {"efficiency", c.efficiency},
+                       {"efficiency_below_bound", efficiency_below_bound(c)},
+                       {"pose_error",
+                        {{"x_m", to_json(c.error_x_m)},
+                         {"y_m", to_json(c.error_y_m)},
+                         {"z_m", to_json(c.error_z_m)},
+                         {"rotation_rad", radians_json(c.rotation_error_deg)}}},
                        {"ambiguity_checked", c.ambiguity_checked},
                        {"ambiguous", c.ambiguous},
                        {"flip_checked", c.flip_checked},
@@ -174,6 +187,7 @@ json to_json(const RunStudy& st) {
           {"frames", st.frames},
           {"estimates", st.estimates},
           {"viewing_angles_recorded", st.viewing_angles_recorded},
+          {"true_poses_recorded", st.true_poses_recorded},
           {"distance_bounds_recorded", st.distance_bounds_recorded},
           {"visible_markers_recorded", st.visible_markers_recorded},
           {"nonfinite_detections", st.nonfinite_detections},
@@ -260,6 +274,16 @@ std::string render_json(const Document& document, const ReportInput& in) {
     header.push_back({term, value});
   root["header"] = header;
   root["figures"] = figures;
+  json pictures = json::array();
+  for (const FramePicture& p : in.pictures)
+    pictures.push_back({{"plan_index", p.frame.plan_index},
+                        {"frame_index", p.frame.frame_index},
+                        {"reason", p.frame.reason},
+                        {"width_px", p.width},
+                        {"height_px", p.height},
+                        {"scale", p.scale},
+                        {"drawn", p.drawn}});
+  root["pictures"] = pictures;
   root["tables"] = tables;
   return root.dump(1);
 }

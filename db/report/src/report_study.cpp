@@ -80,6 +80,7 @@ struct PositionGroup {
 // Accumulators of one distance class.
 struct ClassAccumulator {
   stats::RunningSummary error, reprojection, generalization, bias;
+  stats::RunningSummary error_x, error_y, error_z, rotation_error;  // against the true pose
   Pooled jitter;
   double bound_sum_squares = 0;  // sum (n_p - 1) sigma^2 b_p^2
   double bound_dof = 0;          // dof of the positions that have a bound
@@ -201,6 +202,12 @@ void add_used_estimate(const EstimateSample& e, double truth,
     a.error.add(err);
     a.reprojection.add(e.reprojection_px);
     if (has_generalization) a.generalization.add(e.generalization_px);
+    if (!std::isnan(e.rotation_error_deg)) {
+      a.error_x.add(e.error_x_m);
+      a.error_y.add(e.error_y_m);
+      a.error_z.add(e.error_z_m);
+      a.rotation_error.add(e.rotation_error_deg);
+    }
   }
 }
 
@@ -252,6 +259,12 @@ void add_estimates(const RunData& data, const SolverScopeData& rows, const Posit
     }
     ++s.used;
     add_used_estimate(e, *p.true_distance_m, distance_class, acc);
+    const double abs_error = std::fabs(e.distance_m - *p.true_distance_m);
+    if (s.worst_plan_index < 0 || abs_error > s.worst_abs_error_m) {
+      s.worst_plan_index = p.plan_index;
+      s.worst_frame_index = static_cast<int>(e.frame);
+      s.worst_abs_error_m = abs_error;
+    }
   }
 }
 
@@ -307,6 +320,10 @@ void finish_classes(const std::vector<ClassAccumulator>& acc,
     c.error_m = a.error.summary();
     c.reprojection_px = a.reprojection.summary();
     c.generalization_px = a.generalization.summary();
+    c.error_x_m = a.error_x.summary();
+    c.error_y_m = a.error_y.summary();
+    c.error_z_m = a.error_z.summary();
+    c.rotation_error_deg = a.rotation_error.summary();
     const stats::Summary bias = a.bias.summary();
     c.positions = bias.count;
     c.bias_m = bias.mean;
@@ -478,12 +495,19 @@ std::vector<MissedMarker> study_missed_markers(const RunData& data) {
 void count_positions(const RunData& data, RunStudy& study) {
   study.positions = data.positions.size();
   const stats::EqualWidthBins bins = distance_classes();
+  study.class_example_positions.assign(bins.count(), {});
   for (const PositionData& p : data.positions) {
     study.failed_positions += p.record.status == store::PositionStatus::kFailed ? 1 : 0;
     study.frames += p.frames;
     study.visible_markers_recorded |= !p.record.visible_markers.empty();
     study.distance_bounds_recorded |= !p.record.distance_bounds.empty();
     study.viewing_angles_recorded |= p.record.true_viewing_angle_deg.has_value();
+    study.true_poses_recorded |= p.record.true_pose.has_value();
+    if (p.frames > 0 && p.record.true_distance_m) {
+      const auto c = distance_class(bins, *p.record.true_distance_m);
+      if (c && study.class_example_positions[*c].size() < 4)
+        study.class_example_positions[*c].push_back(p.record.plan_index);
+    }
     if (p.record.status == store::PositionStatus::kOk &&
         (!p.record.true_distance_m || !distance_class(bins, *p.record.true_distance_m))) {
       ++study.positions_outside_classes;

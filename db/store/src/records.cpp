@@ -48,8 +48,8 @@ bool PositionRecord::operator==(const PositionRecord& o) const {
          measured_y_mm == o.measured_y_mm && true_distance_m == o.true_distance_m &&
          settle_time_s == o.settle_time_s && status == o.status &&
          failure_reason == o.failure_reason && true_viewing_angle_deg == o.true_viewing_angle_deg &&
-         distance_bounds == o.distance_bounds && visible_markers == o.visible_markers &&
-         stage_times == o.stage_times && frames == o.frames;
+         true_pose == o.true_pose && distance_bounds == o.distance_bounds &&
+         visible_markers == o.visible_markers && stage_times == o.stage_times && frames == o.frames;
 }
 
 }  // namespace db::store

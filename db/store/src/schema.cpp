@@ -150,6 +150,23 @@ CREATE TABLE run_camera (
   device_version TEXT NOT NULL
 );
 )sql",
+    // 4: the true pose per position (rotation row-major, translation in
+    // metres; NULL when unknown and in positions stored before it), so that
+    // a report can give per-axis translation and rotation errors.
+    R"sql(
+ALTER TABLE positions ADD COLUMN true_r00 REAL;
+ALTER TABLE positions ADD COLUMN true_r01 REAL;
+ALTER TABLE positions ADD COLUMN true_r02 REAL;
+ALTER TABLE positions ADD COLUMN true_r10 REAL;
+ALTER TABLE positions ADD COLUMN true_r11 REAL;
+ALTER TABLE positions ADD COLUMN true_r12 REAL;
+ALTER TABLE positions ADD COLUMN true_r20 REAL;
+ALTER TABLE positions ADD COLUMN true_r21 REAL;
+ALTER TABLE positions ADD COLUMN true_r22 REAL;
+ALTER TABLE positions ADD COLUMN true_tx_m REAL;
+ALTER TABLE positions ADD COLUMN true_ty_m REAL;
+ALTER TABLE positions ADD COLUMN true_tz_m REAL;
+)sql",
 };
 
 constexpr int kMigrationCount = static_cast<int>(sizeof(kMigrations) / sizeof(kMigrations[0]));

@@ -21,8 +21,14 @@ std::int64_t Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& 
         .bind(8, p.settle_time_s)
         .bind(9, std::string_view(to_string(p.status)))
         .bind(10, p.failure_reason)
-        .bind(11, p.true_viewing_angle_deg)
-        .run();
+        .bind(11, p.true_viewing_angle_deg);
+    for (int k = 0; k < 12; ++k) {
+      std::optional<double> v;
+      if (p.true_pose)
+        v = k < 9 ? p.true_pose->R_cam_target[k] : p.true_pose->t_cam_target_m[k - 9];
+      s.insert_position.bind(12 + k, v);
+    }
+    s.insert_position.run();
   } catch (const sqlite::ConstraintError& e) {
     if (e.extended_code == SQLITE_CONSTRAINT_UNIQUE) {
       throw DuplicatePosition(where + ": the run already has this position; nothing written");
@@ -149,7 +155,9 @@ namespace {
 
 constexpr const char* kPositionColumns =
     "SELECT id, plan_index, commanded_x_mm, commanded_y_mm, measured_x_mm, measured_y_mm, "
-    "true_distance_m, settle_time_s, status, failure_reason, true_viewing_angle_deg "
+    "true_distance_m, settle_time_s, status, failure_reason, true_viewing_angle_deg, "
+    "true_r00, true_r01, true_r02, true_r10, true_r11, true_r12, true_r20, true_r21, true_r22, "
+    "true_tx_m, true_ty_m, true_tz_m "
     "FROM positions ";
 
 PositionRecord read_position_row(sqlite::Statement& row) {
@@ -164,6 +172,15 @@ PositionRecord read_position_row(sqlite::Statement& row) {
   p.status = row.get_text(8) == "ok" ? PositionStatus::kOk : PositionStatus::kFailed;
   p.failure_reason = row.get_text(9);
   p.true_viewing_angle_deg = row.get_optional_double(10);
+  // The pose is whole or absent (the store writes all twelve or none).
+  TruePose pose;
+  bool whole = true;
+  for (int k = 0; k < 12 && whole; ++k) {
+    const std::optional<double> v = row.get_optional_double(11 + k);
+    whole = v.has_value();
+    if (whole) (k < 9 ? pose.R_cam_target[k] : pose.t_cam_target_m[k - 9]) = *v;
+  }
+  if (whole) p.true_pose = pose;
   return p;
 }
 

@@ -76,7 +76,9 @@ void Store::Impl::prepare_writers() {
       connection,
       "INSERT INTO positions (run_id, plan_index, commanded_x_mm, commanded_y_mm, measured_x_mm, "
       "measured_y_mm, true_distance_m, settle_time_s, status, failure_reason, "
-      "true_viewing_angle_deg) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11)",
+      "true_viewing_angle_deg, true_r00, true_r01, true_r02, true_r10, true_r11, true_r12, "
+      "true_r20, true_r21, true_r22, true_tx_m, true_ty_m, true_tz_m) VALUES (?1, ?2, ?3, ?4, "
+      "?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23)",
       true);
   insert_bound = sqlite::Statement(
       connection,

@@ -12,14 +12,22 @@
 // existing file); 3 with --fail-on-regression: written, and some solver got
 // significantly worse than the baseline (for CI of products that depend on
 // the solvers).
+#include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
 #include <memory>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "db/report/report.hpp"
+#include "db/store/sha256.hpp"
+#include "db/store/store.hpp"
 #include "report_truth.hpp"
 
 namespace rig::cli {
@@ -48,6 +56,104 @@ std::size_t print_regressions(const db::report::Report& report) {
   std::cout << (worse == 0 ? "no solver significantly worse than the baseline\n"
                            : std::to_string(worse) + " figure(s) significantly worse\n");
   return worse;
+}
+
+// Pictures are at most this wide (px): three fit side by side at 1400 px.
+constexpr int kPictureWidth = 360;
+// Okabe-Ito orange (BGR): visible on a grey frame and for colour-blind readers.
+const cv::Scalar kDetectionColour(0, 159, 230);
+
+// The saved frame's bytes, if the file is still there with the SHA-256 the
+// run stored; else why not (for the report's log).
+std::optional<std::string> saved_frame(const db::store::FrameRecord& f, std::string& why) {
+  if (!f.image_path) {
+    why = "not saved";
+    return std::nullopt;
+  }
+  std::ifstream in(*f.image_path, std::ios::binary);
+  if (!in) {
+    why = *f.image_path + " cannot be read";
+    return std::nullopt;
+  }
+  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (f.image_sha256 && db::store::sha256_hex(bytes) != *f.image_sha256) {
+    why = *f.image_path + " has changed since the run saved it (SHA-256)";
+    return std::nullopt;
+  }
+  return bytes;
+}
+
+// One frame scaled to kPictureWidth at most, each detection's corners A-D
+// (filled dots, joined) and its marker id drawn where the database says.
+std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord& f,
+                                                   const std::string& bytes,
+                                                   const db::report::FrameToShow& which) {
+  const std::vector<unsigned char> data(bytes.begin(), bytes.end());
+  cv::Mat image = cv::imdecode(data, cv::IMREAD_COLOR);
+  if (image.empty()) return std::nullopt;
+  const double scale = std::min(1.0, static_cast<double>(kPictureWidth) / image.cols);
+  cv::Mat picture;
+  cv::resize(image, picture, cv::Size(), scale, scale, cv::INTER_AREA);
+  for (const db::store::DetectionRecord& d : f.detections) {
+    std::vector<cv::Point> corners;
+    for (int c = 0; c < 4; ++c)
+      corners.emplace_back(static_cast<int>(std::lround(d.corners_px[2 * c] * scale)),
+                           static_cast<int>(std::lround(d.corners_px[2 * c + 1] * scale)));
+    cv::polylines(picture, corners, true, kDetectionColour, 1, cv::LINE_8);
+    cv::putText(picture, std::to_string(d.marker_id), corners[0] + cv::Point(4, -4),
+                cv::FONT_HERSHEY_SIMPLEX, 0.4, kDetectionColour, 1, cv::LINE_8);
+  }
+  for (const db::store::DetectionRecord& d : f.detections)  // dots last: on top of any label
+    for (int c = 0; c < 4; ++c)
+      cv::circle(picture,
+                 cv::Point(static_cast<int>(std::lround(d.corners_px[2 * c] * scale)),
+                           static_cast<int>(std::lround(d.corners_px[2 * c + 1] * scale))),
+                 2, kDetectionColour, cv::FILLED, cv::LINE_8);
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", picture, png)) return std::nullopt;
+  db::report::FramePicture p;
+  p.frame = which;
+  p.png.assign(png.begin(), png.end());
+  p.width = picture.cols;
+  p.height = picture.rows;
+  p.scale = scale;
+  const std::size_t n = f.detections.size();
+  p.drawn = std::to_string(n) + (n == 1 ? " marker" : " markers") +
+            " detected: corners A-D (dots) and ids in orange";
+  return p;
+}
+
+// The pictures of the frames the report shows, from the frames the run
+// saved; a frame that is not there is said once on stderr and left out.
+std::vector<db::report::FramePicture> draw_pictures(const db::report::Report& report,
+                                                    const std::string& database) {
+  std::vector<db::report::FramePicture> out;
+  const std::vector<db::report::FrameToShow> wanted = report.frames_to_show();
+  if (wanted.empty()) return out;
+  db::store::StoreOptions options;
+  options.read_only = true;
+  const db::store::Store store(database, options);
+  std::size_t missing = 0;
+  std::string why;
+  for (const db::report::FrameToShow& w : wanted) {
+    const db::store::PositionRecord p = store.position(report.study().run.id, w.plan_index);
+    if (w.frame_index < 0 || static_cast<std::size_t>(w.frame_index) >= p.frames.size()) continue;
+    const db::store::FrameRecord& f = p.frames[static_cast<std::size_t>(w.frame_index)];
+    std::string reason;
+    const std::optional<std::string> bytes = saved_frame(f, reason);
+    std::optional<db::report::FramePicture> picture;
+    if (bytes) picture = draw_frame(f, *bytes, w);
+    if (!bytes || !picture) {
+      ++missing;
+      why = bytes ? *f.image_path + " is not an image" : reason;
+      continue;
+    }
+    out.push_back(std::move(*picture));
+  }
+  if (missing > 0 && !(missing == wanted.size() && why == "not saved"))
+    std::cerr << "rig report: " << missing << " of " << wanted.size()
+              << " frames to show left out, e.g. " << why << "\n";
+  return out;
 }
 
 // Refuses arguments that cannot give what was asked before any work.
@@ -81,7 +187,8 @@ int run_report(const ReportArgs& a) {
   }
   std::optional<db::report::RunReference> baseline;
   if (!a.baseline.empty()) baseline = db::report::RunReference::parse(a.baseline);
-  const db::report::Report report(a.database, options, baseline);
+  db::report::Report report(a.database, options, baseline);
+  report.set_pictures(draw_pictures(report, a.database));
   const db::report::ReportFiles files = report.write(a.out_dir);
   const db::report::RunStudy& s = report.study();
   std::cout << "run " << s.run.id << " of " << a.database << ": " << s.positions << " positions, "

@@ -70,7 +70,7 @@ db::report::RecomputedTruth recompute_truth(
     const sweep::GroundTruth g =
         sweep::ground_truth_at(geometry, camera, target, *p.measured_x_mm, *p.measured_y_mm);
     truth.positions[p.plan_index] = {g.distance_m, g.viewing_angle_deg, g.distance_bounds,
-                                     g.visible_markers};
+                                     g.visible_markers, sweep::stored_true_pose(g.T_cam_target)};
   }
   return truth;
 }

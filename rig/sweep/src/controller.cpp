@@ -321,6 +321,7 @@ class PositionMeasurer {
     rec.true_viewing_angle_deg = truth.viewing_angle_deg;
     rec.visible_markers = truth.visible_markers;
     rec.distance_bounds = truth.distance_bounds;
+    rec.true_pose = stored_true_pose(truth.T_cam_target);
   }
 
   // Detection, every solver and every external estimator on each frame, with

@@ -95,4 +95,14 @@ GroundTruth ground_truth_at(const vision::RigGeometry& geometry, const vision::C
   return truth;
 }
 
+db::store::TruePose stored_true_pose(const vision::Pose& T_cam_target) {
+  db::store::TruePose pose;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j)
+      pose.R_cam_target[3 * i + j] = T_cam_target.R(i, j);
+    pose.t_cam_target_m[i] = T_cam_target.t(i);
+  }
+  return pose;
+}
+
 }  // namespace rig::sweep

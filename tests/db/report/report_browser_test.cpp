@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <set>
 
@@ -69,7 +70,17 @@ TEST(ReportBrowser, TenSolversAt1400PixelsFitWithDistinctColours) {
     spec.solvers.push_back(s);
   }
   rig_test::write_synthetic_run(dir.file("run.db"), spec);
-  const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
+  db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
+  // Pictures of frames as `rig report` draws them (360 x 279 px PNGs), one
+  // per frame it would show.
+  std::vector<db::report::FramePicture> pictures;
+  for (const db::report::FrameToShow& f : report.frames_to_show()) {
+    std::vector<unsigned char> png;
+    ASSERT_TRUE(cv::imencode(".png", cv::Mat(279, 360, CV_8UC3, cv::Scalar(90, 90, 90)), png));
+    pictures.push_back({f, std::string(png.begin(), png.end()), 360, 279, 0.49, "grey"});
+  }
+  ASSERT_GE(pictures.size(), 10u);
+  report.set_pictures(pictures);
   const db::report::ReportFiles files = report.write(dir.file("out"));
   const rig_test::BrowserResult r = rig_test::render_in_chromium(files.html, "", 1400);
   ASSERT_TRUE(r.ran) << r.stderr_text;
@@ -91,6 +102,11 @@ TEST(ReportBrowser, TenSolversAt1400PixelsFitWithDistinctColours) {
        it != std::sregex_iterator(); ++it)
     colours.insert((*it)[1]);
   EXPECT_EQ(colours.size(), 10u);
+  std::size_t shown = 0;
+  for (auto at = r.dom.find("<figure class=\"frame\""); at != std::string::npos;
+       at = r.dom.find("<figure class=\"frame\"", at + 1))
+    ++shown;
+  EXPECT_EQ(shown, pictures.size());
 }
 
 }  // namespace

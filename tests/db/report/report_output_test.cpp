@@ -157,3 +157,80 @@ TEST(ReportColours, AreTheFiguresPalette) {
 }
 
 }  // namespace
+
+// The efficiency figure never draws a solver below the Cramér-Rao bound: a
+// ratio below 1 says the bound's independent-corner assumption fails, and is
+// marked on the bound's line instead. hybrid_oi is written with efficiency
+// 0.25 and ippe with 4. Each class pools about 20 positions x 2 frame
+// differences; with the d^4 weights of the bounds (Satterthwaite) at least 10
+// effective dof, so a class's ratio is true * chi2(10)/10 to first order:
+// hybrid_oi reaches 1 (chi2(10) > 40) with probability 2e-5 and ippe falls to
+// 1 (chi2(10) < 2.5) with 1e-2 per class at worst - but the draws are seeded
+// (SyntheticRunSpec::seed), so the test is deterministic, and the exact
+// expectations below follow from the study's own numbers.
+TEST(ReportEfficiency, NeverDrawsASolverBelowTheCramerRaoBound) {
+  db_test::ScratchDir dir;
+  rig_test::SyntheticRunSpec spec;
+  spec.solvers = rig_test::paper_like_solvers();
+  for (auto& s : spec.solvers) {
+    if (s.name == "hybrid_oi") s.efficiency = 0.25;
+    if (s.name == "ippe") s.efficiency = 4.0;
+  }
+  rig_test::write_synthetic_run(dir.file("run.db"), spec);
+  const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
+  const db::report::ReportFiles files = report.write(dir.file("out"));
+  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+
+  const db::report::SolverStudy* below = report.study().find("hybrid_oi", "0");
+  const db::report::SolverStudy* above = report.study().find("ippe", "0");
+  ASSERT_TRUE(below && above);
+  for (std::size_t i = 0; i < below->classes.size(); ++i) {
+    EXPECT_LT(below->classes[i].efficiency, 0.75) << i;  // 0.25 (1 + 4 sqrt(2/10)) = 0.70
+    EXPECT_TRUE(db::report::efficiency_below_bound(below->classes[i]));
+    EXPECT_FALSE(db::report::efficiency_below_bound(above->classes[i])) << i;
+  }
+  // The marks: every class where any drawn solver of the scope is below 1
+  // (hybrid_oi is in all of them), each once, by distance.
+  std::vector<double> failing_x;
+  for (const db::report::DistanceClassStudy& c : below->classes)
+    failing_x.push_back(0.5 * (c.lower_m + c.upper_m));
+  bool figure_found = false;
+  for (const auto& f : json["figures"]) {
+    if (f["id"] != "efficiency-0") continue;
+    figure_found = true;
+    bool marks_found = false;
+    for (const auto& s : f["series"]) {
+      const std::string label = s["label"];
+      if (label.rfind("a solver below 1 here", 0) == 0) {
+        marks_found = true;
+        EXPECT_EQ(s["x"].get<std::vector<double>>(), failing_x);
+        for (const auto& y : s["y"])
+          EXPECT_EQ(y.get<double>(), 1.0);
+        continue;
+      }
+      if (label.rfind("Cramér-Rao bound", 0) == 0) continue;
+      // A solver's own points: none below 1 (null = not drawn).
+      for (const auto& y : s["y"]) {
+        if (!y.is_null()) {
+          EXPECT_GE(y.get<double>(), 1.0) << label;
+        }
+        if (label == "hybrid_oi") {
+          EXPECT_TRUE(y.is_null()) << "hybrid_oi drawn below the bound";
+        }
+        if (label == "ippe") {
+          EXPECT_FALSE(y.is_null()) << "ippe's efficiency 4 not drawn";
+        }
+      }
+    }
+    EXPECT_TRUE(marks_found);
+    EXPECT_NE(f["caption"].get<std::string>().find("not a solver better than the bound"),
+              std::string::npos);
+  }
+  EXPECT_TRUE(figure_found);
+  // report.json says which classes are below the bound.
+  for (const auto& j : json["study"]["solvers"]) {
+    if (j["scope"] != "0" || (j["solver"] != "hybrid_oi" && j["solver"] != "ippe")) continue;
+    for (const auto& c : j["classes"])
+      EXPECT_EQ(c["efficiency_below_bound"].get<bool>(), j["solver"] == "hybrid_oi");
+  }
+}

@@ -131,6 +131,13 @@ TEST(StoreSchema, RefusesAFileThatCannotBeOpened) {
 
 namespace {
 
+// Migration 4's additions, removed from a current file.
+void drop_true_pose_columns(RawDb& raw) {
+  for (const char* c : {"true_r00", "true_r01", "true_r02", "true_r10", "true_r11", "true_r12",
+                        "true_r20", "true_r21", "true_r22", "true_tx_m", "true_ty_m", "true_tz_m"})
+    raw.exec(std::string("ALTER TABLE positions DROP COLUMN ") + c);
+}
+
 // A file as schema version 1 wrote it: migration 2's additions removed from a
 // current file, with one position in it.
 std::string make_version1_file(const ScratchDir& dir) {
@@ -145,6 +152,7 @@ std::string make_version1_file(const ScratchDir& dir) {
       "DROP TABLE run_camera; DROP TABLE distance_bounds; DROP TABLE visible_markers; "
       "DROP TABLE run_events; "
       "ALTER TABLE positions DROP COLUMN true_viewing_angle_deg; PRAGMA user_version = 1");
+  drop_true_pose_columns(raw);
   return path;
 }
 
@@ -164,6 +172,7 @@ TEST(StoreSchema, MigratesAVersion1FileKeepingItsPositions) {
   EXPECT_FALSE(back.true_viewing_angle_deg.has_value());
   EXPECT_TRUE(back.distance_bounds.empty());
   EXPECT_TRUE(back.visible_markers.empty());
+  EXPECT_FALSE(back.true_pose.has_value());
   // And the migrated file takes positions with the new fields.
   store.append_position(1, db_test::make_position(1));
   EXPECT_EQ(store.position(1, 1), db_test::make_position(1));
@@ -179,7 +188,11 @@ TEST(StoreSchema, MigratesAVersion2FileWhoseRunsHaveNoCamera) {
     db::store::Store store(path);
     store.start_run(db_test::make_run_description(4));
   }
-  RawDb(path).exec("DROP TABLE run_camera; PRAGMA user_version = 2");
+  {
+    RawDb raw(path);
+    raw.exec("DROP TABLE run_camera; PRAGMA user_version = 2");
+    drop_true_pose_columns(raw);
+  }
   db::store::Store store(path);
   EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
             std::to_string(db::store::Store::kSchemaVersion));
@@ -190,6 +203,34 @@ TEST(StoreSchema, MigratesAVersion2FileWhoseRunsHaveNoCamera) {
   ASSERT_TRUE(store.run(run).camera.has_value());
   EXPECT_EQ(store.run(run).camera->model, "rig-sim");
   EXPECT_FALSE(store.run(1).camera.has_value());
+}
+
+// A version 3 file (before the true pose) keeps its positions, which read
+// without a true pose, and takes positions with one.
+TEST(StoreSchema, MigratesAVersion3FileWhosePositionsHaveNoTruePose) {
+  ScratchDir dir;
+  const std::string path = dir.file("v3.db");
+  {
+    db::store::Store store(path);
+    const std::int64_t run = store.start_run(db_test::make_run_description(4));
+    store.append_position(run, db_test::make_position(0));
+  }
+  {
+    RawDb raw(path);
+    drop_true_pose_columns(raw);
+    raw.exec("PRAGMA user_version = 3");
+  }
+  db::store::Store store(path);
+  EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
+            std::to_string(db::store::Store::kSchemaVersion));
+  db::store::PositionRecord expected = db_test::make_position(0);
+  expected.true_pose.reset();
+  EXPECT_EQ(store.position(1, 0), expected);
+  store.append_position(1, db_test::make_position(1));
+  const db::store::PositionRecord back = store.position(1, 1);
+  ASSERT_TRUE(back.true_pose.has_value());
+  EXPECT_EQ(back, db_test::make_position(1));
+  EXPECT_EQ(RawDb(path).text("PRAGMA integrity_check"), "ok");
 }
 
 TEST(StoreSchema, ReadOnlyNeverCreatesAMissingFile) {

@@ -107,6 +107,13 @@ TEST(SweepEndToEnd, StoresEveryPlannedPositionOnceWithEverySolverAndTheTrueDista
             (std::vector<std::string>{"0", "1", "2", "3", "4", "5"}));
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status != 'ok'"), 0);
   expect_positions_whole(db, 2);
+  // Every position keeps its true pose, whose translation is the true
+  // distance (both from the read-back and the rig geometry; squares of
+  // ~0.5 m agree to rounding, 1e-16, so 1e-12 m^2 only allows for that).
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE true_tz_m IS NULL OR "
+                     "abs(true_tx_m * true_tx_m + true_ty_m * true_ty_m + true_tz_m * true_tz_m "
+                     "- true_distance_m * true_distance_m) > 1e-12"),
+            0);
   // Every solver has estimates, on the pose marker ("0") and on the whole target.
   for (const std::string& solver : vision::solver_names()) {
     for (const std::string scope : {"0", "target"}) {

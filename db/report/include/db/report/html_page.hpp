@@ -76,6 +76,13 @@ class Page {
   // <figure id class="plot"> with svg::render_svg(figure) and a <figcaption>
   // of the caption; throws what render_svg throws.
   void figure(const svg::Figure& figure);
+  // <figure id class="frame"> holding the PNG bytes `png` as an <img> of
+  // width x height CSS px (a data: URI, so the page stays self-contained;
+  // scaled down to the page's width if wider) with `alt` and a <figcaption>.
+  // Throws std::invalid_argument for an id already used or a width or height
+  // below 1.
+  void picture(const std::string& id, const std::string& png, int width, int height,
+               const std::string& alt, const std::string& caption);
   // <section id> with a heading one level below the enclosing section (h2 at
   // the top level, at most h6), listed in the table of contents.
   void begin_section(const std::string& id, const std::string& title);

@@ -28,10 +28,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "db/stats/compare.hpp"
@@ -70,6 +72,7 @@ struct PositionTruth {
   std::optional<double> true_viewing_angle_deg;
   std::vector<store::DistanceBound> distance_bounds;
   std::vector<store::VisibleMarker> visible_markers;
+  std::optional<store::TruePose> true_pose;
 };
 
 struct RecomputedTruth {
@@ -154,7 +157,28 @@ struct DistanceClassStudy {
   double efficiency = 0;
   std::size_t ambiguity_checked = 0, ambiguous = 0;  // converged estimates with an ambiguity ratio
   std::size_t flip_checked = 0, flips = 0;           // frames with both scopes (scope "0" only)
+  // The full pose against the position's true pose (positions that recorded
+  // it, schema 4 on; count 0 otherwise), every used estimate: translation
+  // error t_est - t_true per axis of the camera frame (x right, y down, z
+  // along the optical axis; m) and rotation error, the angle of
+  // R_est^T R_true (degrees).
+  stats::Summary error_x_m, error_y_m, error_z_m, rotation_error_deg;
 };
+
+// The bound behind `efficiency` assumes corner errors independent between
+// corners and coordinates (the stored bound is sigma (J^T J)^-1 per px; the
+// database keeps neither J nor the corners' error covariance, so the bound
+// under correlated errors cannot be computed from it). No unbiased solver
+// goes below the true bound: a ratio below 1 says the assumption fails in
+// that class, not that the solver beat the bound.
+inline bool efficiency_below_bound(const DistanceClassStudy& c) {
+  return c.efficiency < 1.0;  // false for NaN
+}
+// The efficiency a figure may draw as the solver's point: NaN where it is
+// below the bound (efficiency_below_bound) or unknown.
+inline double efficiency_drawn(const DistanceClassStudy& c) {
+  return c.efficiency >= 1.0 ? c.efficiency : std::numeric_limits<double>::quiet_NaN();
+}
 
 // Counts by viewing-angle class, for ambiguity and flips.
 struct AngleClassStudy {
@@ -209,6 +233,11 @@ struct SolverStudy {
   std::string coincides_with;
   // Fig. 12: per-position mean estimated against true distance (thinned).
   std::vector<double> plot_true_m, plot_estimated_m;
+  // The used estimate farthest from the true distance: its position's plan
+  // index and its frame (-1: none used), and |estimated - true|, m.
+  std::int64_t worst_plan_index = -1;
+  int worst_frame_index = -1;
+  double worst_abs_error_m = 0;
 };
 
 // Corner noise per distance class: pooled within-position standard
@@ -290,6 +319,10 @@ struct RunStudy {
   std::size_t nonfinite_detections = 0, nonfinite_visible_markers = 0;
   bool distance_bounds_recorded = false;
   bool viewing_angles_recorded = false;
+  bool true_poses_recorded = false;  // positions with a true pose (schema 4 on)
+  // Per distance class, the plan indices of its first positions with frames
+  // (at most 4), for pictures.
+  std::vector<std::vector<std::int64_t>> class_example_positions;
   std::vector<StageStudy> stages;
   std::vector<store::RunEvent> events;
   ReportOptions options;
@@ -366,6 +399,24 @@ struct ReportFiles {
   std::vector<std::string> csv;
 };
 
+// A frame the report shows as a picture, and why (Report::frames_to_show).
+struct FrameToShow {
+  std::int64_t plan_index = 0;
+  int frame_index = 0;
+  std::string reason;  // e.g. "class 0.10-0.19 m", "worst of hybrid_ekf (scope 0): +2.31 mm"
+};
+
+// A frame drawn for the page by the caller (db knows no image format): PNG
+// bytes of width x height px, the frame scaled by `scale` (picture px per
+// frame px) with the detections drawn, and what was drawn, for the caption.
+struct FramePicture {
+  FrameToShow frame;
+  std::string png;
+  int width = 0, height = 0;
+  double scale = 1;
+  std::string drawn;  // e.g. "4 markers detected: corners and ids in orange"
+};
+
 class Report {
  public:
   // Computes the study of `database` (see study_run); with a baseline, also
@@ -388,7 +439,17 @@ class Report {
   // when one cannot be written.
   ReportFiles write(const std::string& out_dir) const;
 
+  // The frames worth a picture: the first `per_class` stored positions with
+  // frames of each distance class (their frame 0) and, per solver of the
+  // pose marker's scope, the frame of its worst used estimate; each frame
+  // once, by plan index.
+  std::vector<FrameToShow> frames_to_show(std::size_t per_class = 2) const;
+  // The pictures write() puts on the page (section "frames") and lists in
+  // report.json. Without any, the page says how to get them.
+  void set_pictures(std::vector<FramePicture> pictures) { pictures_ = std::move(pictures); }
+
  private:
+  std::vector<FramePicture> pictures_;
   RunStudy study_;
   std::optional<RunStudy> baseline_;
   std::vector<ComparedFigure> comparison_;

@@ -136,6 +136,18 @@ struct DistanceBound {
   }
 };
 
+// The true pose of the target frame in the camera frame at a position, from
+// the bench read-back and the rig geometry: the truth every solver's
+// T_cam_target (EstimateRecord) is compared with. Same frames and units as
+// EstimateRecord (row-major rotation, metres).
+struct TruePose {
+  std::array<double, 9> R_cam_target{};
+  std::array<double, 3> t_cam_target_m{};
+  bool operator==(const TruePose& o) const {
+    return R_cam_target == o.R_cam_target && t_cam_target_m == o.t_cam_target_m;
+  }
+};
+
 // A marker whose four corners project inside the image at the true pose: the
 // detector should have found it. side_px is its mean projected side length.
 struct VisibleMarker {
@@ -175,6 +187,8 @@ struct PositionRecord {
   // Angle between the target's normal and the line of sight from the target
   // origin to the camera at the true pose, degrees; absent when unknown.
   std::optional<double> true_viewing_angle_deg;
+  // Absent when unknown, and in runs stored before schema 4.
+  std::optional<TruePose> true_pose;
   std::vector<DistanceBound> distance_bounds;  // per scope, at the true pose
   std::vector<VisibleMarker> visible_markers;  // at the true pose, by marker id
   PositionStatus status = PositionStatus::kOk;

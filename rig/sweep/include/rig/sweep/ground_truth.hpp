@@ -38,4 +38,7 @@ struct GroundTruth {
 GroundTruth ground_truth_at(const vision::RigGeometry& geometry, const vision::Camera& camera,
                             const vision::Target& target, double x_mm, double y_mm);
 
+// The true pose as the database stores it (row-major rotation, metres).
+db::store::TruePose stored_true_pose(const vision::Pose& T_cam_target);
+
 }  // namespace rig::sweep
