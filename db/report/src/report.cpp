@@ -65,16 +65,19 @@ void replace_truth(const RecomputedTruth& truth, RunData& data) {
 // so large that its square overflows, one that is not finite) means the
 // database holds values no rig measured: bad input naming the database.
 RunStudy study_run(const std::string& database, const ReportOptions& options) {
-  RunData data = report::load_run(database, options.run_id);
   std::optional<RecomputedTruth> truth;
+  std::function<void(RunData&)> amend_truth;
   if (options.recompute_truth) {
-    std::vector<store::PositionRecord> positions;
-    positions.reserve(data.positions.size());
-    for (const PositionData& p : data.positions)
-      positions.push_back(p.record);
-    truth = options.recompute_truth(data.run, positions);
-    replace_truth(*truth, data);
+    amend_truth = [&](RunData& data) {
+      std::vector<store::PositionRecord> positions;
+      positions.reserve(data.positions.size());
+      for (const PositionData& p : data.positions)
+        positions.push_back(p.record);
+      truth = options.recompute_truth(data.run, positions);
+      replace_truth(*truth, data);
+    };
   }
+  RunData data = report::load_run(database, options.run_id, amend_truth);
   try {
     RunStudy study = report::compute_study(data, options);
     if (truth) {

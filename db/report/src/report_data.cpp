@@ -436,7 +436,8 @@ void read_detections(store::sqlite::Connection& connection, std::int64_t id, con
 
 }  // namespace
 
-RunData load_run(const std::string& database, std::optional<std::int64_t> run_id) {
+RunData load_run(const std::string& database, std::optional<std::int64_t> run_id,
+                 const std::function<void(RunData&)>& amend_truth) {
   RunData data;
   data.database = database;
   std::optional<store::Store> store(open_for_report(database));
@@ -457,6 +458,7 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   Slots slots(database, id);
   data.positions = read_positions(connection, *store, database, id, slots);
   store.reset();
+  if (amend_truth) amend_truth(data);
   data.events = read_events(connection, id);
   read_frame_counts(connection, id, slots, data.positions);
   read_estimates(connection, id, slots, data);

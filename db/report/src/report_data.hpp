@@ -9,6 +9,7 @@
 // frame_id indexes, so no pass scans a whole table of a file holding many
 // runs.
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <map>
 #include <optional>
@@ -87,8 +88,11 @@ struct RunData {
 
 // Opens `database` read-only and picks the run (run_id or the latest
 // completed one). Throws ReportInputError for unusable input, StoreError for
-// a failure while reading.
-RunData load_run(const std::string& database, std::optional<std::int64_t> run_id);
+// a failure while reading. `amend_truth`, when set, is called once with the
+// run and its positions before the estimates are read, so that every error
+// (distance and pose) is taken against the truth it leaves.
+RunData load_run(const std::string& database, std::optional<std::int64_t> run_id,
+                 const std::function<void(RunData&)>& amend_truth = {});
 
 // The SQL of the passes over estimates and detections (for the plan test).
 extern const char* const kEstimatesQuery;

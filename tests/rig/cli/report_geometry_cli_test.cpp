@@ -76,6 +76,7 @@ void write_run(const std::string& db, const std::string& geometry_path, std::uin
     p.true_viewing_angle_deg = truth.viewing_angle_deg;
     p.distance_bounds = truth.distance_bounds;
     p.visible_markers = truth.visible_markers;
+    p.true_pose = rig::sweep::stored_true_pose(truth.T_cam_target);
     const double nominal_m = 1.0 - 0.1 * (i / 3);  // what both runs' solvers see, roughly
     for (int f = 0; f < 2; ++f) {
       db::store::FrameRecord frame;
