@@ -93,8 +93,15 @@ std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
   options.exposure_time_s = config.camera.nominal_exposure_us * 1e-6;
   auto renderer = std::make_shared<const scene::SceneRenderer>(truth.camera, truth.target,
                                                                vision::Codebook(), options);
-  return std::make_unique<CameraServer>(std::move(renderer), truth.geometry, std::move(position),
-                                        config.camera);
+  auto camera = std::make_unique<CameraServer>(std::move(renderer), truth.geometry,
+                                               std::move(position), config.camera);
+  if (!config.realism.attitude.zero()) {
+    camera->set_pose_model(
+        [attitude = config.realism.attitude, geometry = truth.geometry](double x_mm, double y_mm) {
+          return attitude.T_cam_target(geometry, x_mm, y_mm);
+        });
+  }
+  return camera;
 }
 
 }  // namespace sim::camera
