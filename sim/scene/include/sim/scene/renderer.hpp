@@ -4,7 +4,8 @@
 // Pipeline (once per camera: the undistorted ray of every pixel and its
 // Jacobian, by inverting the Brown-Conrady model of vision::Camera; per frame):
 //   1. geometry: each pixel's ray meets the sheet plane z = 0 (a homography of
-//      the undistorted normalized point), giving the pixel's footprint on the
+//      the undistorted normalized point), or the bowed sheet a few steps from
+//      it (SceneOptions::bow_sag_m), giving the pixel's footprint on the
 //      sheet (its centre and the 2x2 Jacobian d(target)/d(pixel));
 //   2. area-correct lookup: the reflectance averaged over the footprint, exactly
 //      integrated on the artwork (per marker a summed-area table of its cell
@@ -13,11 +14,12 @@
 //      integrated over a box of the same second moments as its footprint, so
 //      there is no aliasing near (0.1 m, cells of ~60 px) nor far (1 m, cells
 //      of ~6 px);
-//   3. lighting gradient across the sheet, background (optionally clutter)
-//      where the sheet is not, occluders in front;
+//   3. lighting gradient across the sheet, the glare lobe of a lamp mirrored
+//      in it (weighted by the paper's and the toner's gloss), background
+//      (optionally clutter) where the sheet is not, occluders in front;
 //   4. optical blur (Gaussian PSF), vignetting;
-//   5. sensor: electrons = signal_scale * exposure * full_well * irradiance
-//      * (1 + PRNU), plus the dark signal (dark current x exposure time +
+//   5. sensor: electrons = signal_scale * flicker * exposure * full_well
+//      * irradiance * (1 + PRNU), plus the dark signal (dark current x exposure time +
 //      DSNU); shot noise (Poisson, as a Gaussian of variance = electrons) +
 //      read noise; the well clips at full_well; gain to 8-bit DN, rounding
 //      and clipping.
