@@ -50,8 +50,8 @@ BENCHMARK(BM_RenderFrame)
     ->Unit(benchmark::kMillisecond);
 
 // The costliest realism: config/realism/paper.toml's scene (defocus up to
-// sigma 2 px, thin prism, PRNU/DSNU, dark current, the physical sensor path
-// at 1.5x exposure and 2x gain).
+// sigma 2 px, thin prism, PRNU/DSNU, dark current, glare and toner gloss, the
+// bowed sheet, flicker, the physical sensor path at 1.5x exposure and 2x gain).
 sim::scene::SceneOptions paper_profile_scene() {
   sim::scene::SceneOptions o;
   o.blur_sigma_px = 1.0;
@@ -63,6 +63,14 @@ sim::scene::SceneOptions paper_profile_scene() {
   o.dark_current_e_per_s = 100;
   o.prnu_rel = 0.01;
   o.dsnu_electrons = 10;
+  o.glare_peak = 0.12;  // glare (every tile's lobe), toner gloss, a bowed sheet, flicker
+  o.glare_lobe_deg = 6;
+  o.glare_light_tilt_deg = 35;
+  o.glare_light_azimuth_deg = 200;
+  o.ink_gloss = 3;
+  o.bow_sag_m = 0.001;
+  o.bow_shape = sim::scene::SceneOptions::BowShape::kCylinderX;
+  o.flicker_modulation = 0.3;
   return o;
 }
 

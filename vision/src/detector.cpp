@@ -47,6 +47,8 @@ void validate(const DetectorParameters& p) {
   require(p.max_sample_residual_px > 0, "max_sample_residual_px", "> 0");
   require(p.max_edge_residual_px > 0, "max_edge_residual_px", "> 0");
   require(p.image_border_margin_px >= 0, "image_border_margin_px", ">= 0");
+  require(p.min_edge_window_px >= 1 && p.min_edge_window_px <= p.edge_refine_px,
+          "min_edge_window_px", "in [1, edge_refine_px]");
   require(p.max_corner_shift_px > 0, "max_corner_shift_px", "> 0");
   require(p.cell_sample_fraction > 0 && p.cell_sample_fraction <= 1, "cell_sample_fraction",
           "in (0, 1]");

@@ -51,15 +51,41 @@ struct SideFit {
 };
 
 // Reads the profile through `centre` along `normal` (image, unit, outward) at
-// offsets -half .. +half.
+// offsets -inner .. +outer.
 void read_profile(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eigen::Vector2d& normal,
-                  double half, std::vector<double>* values) {
-  const int n = static_cast<int>(std::lround(2 * half / kProfileStepPx)) + 1;
+                  double inner, double outer, std::vector<double>* values) {
+  const int n = static_cast<int>(std::lround((inner + outer) / kProfileStepPx)) + 1;
   values->resize(n);
   for (int j = 0; j < n; ++j) {
-    const Eigen::Vector2d q = centre + (-half + j * kProfileStepPx) * normal;
+    const Eigen::Vector2d q = centre + (-inner + j * kProfileStepPx) * normal;
     (*values)[j] = sample_bilinear(gray, q.x(), q.y());
   }
+}
+
+// How far from `from` along the unit `direction` (at most `reach` pixels, in
+// whole profile steps) the image holds samples `margin` inside its border;
+// negative when `from` itself is not.
+double reach_inside(const cv::Mat& gray, const Eigen::Vector2d& from,
+                    const Eigen::Vector2d& direction, double reach, double margin) {
+  if (!inside_image(gray, from, margin)) return -1;
+  const double hi[2] = {gray.cols - 1 - margin, gray.rows - 1 - margin};
+  double s = reach;
+  for (int a = 0; a < 2; ++a) {
+    if (direction[a] > 1e-12) s = std::min(s, (hi[a] - from[a]) / direction[a]);
+    if (direction[a] < -1e-12) s = std::min(s, (margin - from[a]) / direction[a]);
+  }
+  return std::floor(s / kProfileStepPx + 1e-9) * kProfileStepPx;
+}
+
+// The window -inner .. +outer across an edge at `centre`: `half` each way,
+// cut where the image ends (a marker near the border). False when either
+// side keeps less than min_edge_window_px: the edge's plateaus, and so its
+// position, would not be measured.
+bool edge_window(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eigen::Vector2d& normal,
+                 double half, const DetectorParameters& p, double* inner, double* outer) {
+  *inner = reach_inside(gray, centre, -normal, half, p.image_border_margin_px);
+  *outer = reach_inside(gray, centre, normal, half, p.image_border_margin_px);
+  return *inner >= p.min_edge_window_px && *outer >= p.min_edge_window_px;
 }
 
 // Equal-area edge position on a profile starting at s0 (see the file comment),
@@ -155,24 +181,23 @@ SideSampling plan_side(const Eigen::Vector2d& n0, const Eigen::Vector2d& n1, dou
 // equal-area position in a window of edge_refine_px around it. False when no
 // edge is found or the window leaves the image.
 bool locate_edge(const cv::Mat& gray, const Eigen::Vector2d& px, const Eigen::Vector2d& normal,
-                 const SideSampling& side, const DetectorParameters& p,
+                 const SideSampling& side, double inner, const DetectorParameters& p,
                  const std::vector<double>& profile, double* s_edge, double* step) {
-  if (!side.first_pass) return equal_area_edge(profile, -side.half, s_edge, step);
+  if (!side.first_pass) return equal_area_edge(profile, -inner, s_edge, step);
   int best = 0;
   double best_d = -1;
   for (size_t i = 0; i + 1 < profile.size(); ++i) {
     const double d = profile[i + 1] - profile[i];
     if (d > best_d) best_d = d, best = static_cast<int>(i);
   }
-  const double s_peak = -side.half + (best + 0.5) * kProfileStepPx;
+  const double s_peak = -inner + (best + 0.5) * kProfileStepPx;
   const Eigen::Vector2d c = px + s_peak * normal;
-  const double margin = p.image_border_margin_px;
-  if (!inside_image(gray, c - p.edge_refine_px * normal, margin) ||
-      !inside_image(gray, c + p.edge_refine_px * normal, margin))
+  double window_inner = 0, window_outer = 0;
+  if (!edge_window(gray, c, normal, p.edge_refine_px, p, &window_inner, &window_outer))
     return false;
   std::vector<double> window;
-  read_profile(gray, c, normal, p.edge_refine_px, &window);
-  const bool ok = equal_area_edge(window, -p.edge_refine_px, s_edge, step);
+  read_profile(gray, c, normal, window_inner, window_outer, &window);
+  const bool ok = equal_area_edge(window, -window_inner, s_edge, step);
   *s_edge += s_peak;
   return ok;
 }
@@ -184,9 +209,10 @@ EdgeFitStatus sample_side(const cv::Mat& gray, const Camera& camera, const SideS
                           const DetectorParameters& p, std::vector<double>* profile,
                           std::vector<Sample>* samples) {
   const double margin = p.image_border_margin_px;
-  // The corners themselves must lie inside, with their search windows.
+  // The corners themselves must lie inside, with the least window an edge
+  // needs on either side (windows are cut where the image ends).
   for (const auto& c : {side.n0, side.n1})
-    if (!inside_image(gray, camera.distort_normalized(c), margin + side.half))
+    if (!inside_image(gray, camera.distort_normalized(c), margin + p.min_edge_window_px))
       return EdgeFitStatus::kCutByImageBorder;
   samples->assign(side.m, Sample{});
   for (int k = 0; k < side.m; ++k) {
@@ -195,12 +221,12 @@ EdgeFitStatus sample_side(const cv::Mat& gray, const Camera& camera, const SideS
     const Eigen::Matrix2d j = camera.distort_jacobian(pn);
     const Eigen::Vector2d tangent = (j * side.dn).normalized();
     const Eigen::Vector2d normal(tangent.y(), -tangent.x());  // outward for a clockwise quad
-    if (!inside_image(gray, px - side.half * normal, margin) ||
-        !inside_image(gray, px + side.half * normal, margin))
+    double inner = 0, outer = 0;
+    if (!edge_window(gray, px, normal, side.half, p, &inner, &outer))
       return EdgeFitStatus::kCutByImageBorder;
-    read_profile(gray, px, normal, side.half, profile);
+    read_profile(gray, px, normal, inner, outer, profile);
     double s_edge = 0, step = 0;
-    if (!locate_edge(gray, px, normal, side, p, *profile, &s_edge, &step)) continue;
+    if (!locate_edge(gray, px, normal, side, inner, p, *profile, &s_edge, &step)) continue;
     // Back to the normalized plane through the local Jacobian.
     const Eigen::Matrix2d j_inv = j.inverse();
     Sample& s = (*samples)[k];

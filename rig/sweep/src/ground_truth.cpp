@@ -4,6 +4,7 @@
 #include <string>
 
 #include "vision/cramer_rao.hpp"
+#include "vision/detector.hpp"
 #include "vision/pose_jacobian.hpp"
 
 namespace rig::sweep {
@@ -11,9 +12,37 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-bool inside_image(const vision::Camera& camera, const Eigen::Vector2d& px) {
-  return px.x() >= 0 && px.y() >= 0 && px.x() <= camera.width_px() - 1 &&
-         px.y() <= camera.height_px() - 1;
+// A marker is in view when its whole outline (the black square's edges,
+// distorted: barrel distortion bows a side's middle outwards of its corners)
+// keeps this far inside [0, width - 1] x [0, height - 1]: the detector locates
+// an outer edge only with its white beyond it, and reads that white
+// min_edge_window_px beyond the edge and image_border_margin_px from the
+// border (vision/detector.hpp). Nearer, the marker is not measurable, only
+// seen, and is not counted.
+double in_view_margin_px() {
+  const vision::DetectorParameters p;
+  return p.image_border_margin_px + p.min_edge_window_px;
+}
+
+constexpr int kOutlineSamplesPerSide = 16;
+
+// The outline of a marker at `pose` keeps in_view_margin_px() from the border
+// and is in front of the camera.
+bool outline_in_view(const vision::Camera& camera, const std::array<Eigen::Vector3d, 4>& corners,
+                     const vision::Pose& pose) {
+  const double m = in_view_margin_px();
+  for (int k = 0; k < 4; ++k) {
+    for (int s = 0; s < kOutlineSamplesPerSide; ++s) {
+      const double f = static_cast<double>(s) / kOutlineSamplesPerSide;
+      const Eigen::Vector3d p = pose * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]);
+      if (!(p.z() > 0)) return false;
+      const Eigen::Vector2d px = camera.project(p);
+      if (!(px.x() >= m && px.y() >= m && px.x() <= camera.width_px() - 1 - m &&
+            px.y() <= camera.height_px() - 1 - m))
+        return false;
+    }
+  }
+  return true;
 }
 
 // Corners of the markers projected through `pose`; false if one is behind the camera.
@@ -75,13 +104,10 @@ GroundTruth ground_truth_at(const vision::RigGeometry& geometry, const vision::C
   for (const auto& marker : target.markers) {
     Eigen::VectorXd px;
     if (!project_corners(camera, target, {marker.id}, T, px)) continue;
-    bool inside = true;
     double side = 0;
-    for (int k = 0; k < 4; ++k) {
-      inside = inside && inside_image(camera, px.segment<2>(2 * k));
+    for (int k = 0; k < 4; ++k)
       side += (px.segment<2>(2 * k) - px.segment<2>(2 * ((k + 1) % 4))).norm() / 4;
-    }
-    if (!inside) continue;
+    if (!outline_in_view(camera, target.corners_m(marker.id), T)) continue;
     in_view.push_back(marker.id);
     truth.visible_markers.push_back({marker.id, side});
   }

@@ -94,11 +94,18 @@ std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
   options.exposure_time_s = config.camera.nominal_exposure_us * 1e-6;
   auto renderer = std::make_shared<const scene::SceneRenderer>(truth.camera, truth.target,
                                                                vision::Codebook(), options);
-  CameraServerOptions camera = config.camera;
-  camera.bayer_rg = config.realism.bayer_rg;
-  camera.filter_response = config.realism.filter_response;
-  return std::make_unique<CameraServer>(std::move(renderer), truth.geometry, std::move(position),
-                                        camera);
+  CameraServerOptions server_options = config.camera;
+  server_options.bayer_rg = config.realism.bayer_rg;
+  server_options.filter_response = config.realism.filter_response;
+  auto camera = std::make_unique<CameraServer>(std::move(renderer), truth.geometry,
+                                               std::move(position), server_options);
+  if (!config.realism.attitude.zero()) {
+    camera->set_pose_model(
+        [attitude = config.realism.attitude, geometry = truth.geometry](double x_mm, double y_mm) {
+          return attitude.T_cam_target(geometry, x_mm, y_mm);
+        });
+  }
+  return camera;
 }
 
 }  // namespace sim::camera

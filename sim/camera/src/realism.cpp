@@ -69,6 +69,18 @@ void read_scene(config::Table light, config::Table optics, config::Table sensor,
   o->lighting_gradient_per_m =
       light.number_or("lighting_gradient_per_m", o->lighting_gradient_per_m);
   o->lighting_direction_deg = light.number_or("lighting_direction_deg", o->lighting_direction_deg);
+  o->glare_peak = light.number_or("glare_peak", o->glare_peak, within(0, 100));
+  o->glare_lobe_deg = light.number_or("glare_lobe_deg", o->glare_lobe_deg, within(0.01, 90));
+  o->glare_light_tilt_deg =
+      light.number_or("glare_light_tilt_deg", o->glare_light_tilt_deg, within(0, 89.9));
+  o->glare_light_azimuth_deg =
+      light.number_or("glare_light_azimuth_deg", o->glare_light_azimuth_deg, within(-360, 360));
+  o->flicker_modulation =
+      light.number_or("flicker_modulation", o->flicker_modulation, within(0, 1));
+  o->flicker_frequency_hz =
+      light.number_or("flicker_frequency_hz", o->flicker_frequency_hz, within(1, 1e5));
+  o->flicker_phase_deg =
+      light.number_or("flicker_phase_deg", o->flicker_phase_deg, within(-360, 360));
   light.reject_unknown();
   o->blur_sigma_px = optics.number_or("blur_sigma_px", o->blur_sigma_px, within(0, 20));
   o->vignetting = optics.number_or("vignetting", o->vignetting, within(0, 1));
@@ -94,8 +106,13 @@ void read_scene(config::Table light, config::Table optics, config::Table sensor,
   sensor.reject_unknown();
 }
 
-AxisRealism read_bench_axis(config::Table t) {
+AxisRealism read_bench_axis(config::Table t, AxisAngularError* angular) {
   AxisRealism a;
+  const config::NumberRule arcsec = within(-3600, 3600);
+  angular->pitch_arcsec_per_100mm = t.number_or("pitch_arcsec_per_100mm", 0, arcsec);
+  angular->pitch_arcsec_per_100mm2 = t.number_or("pitch_arcsec_per_100mm2", 0, arcsec);
+  angular->yaw_arcsec_per_100mm = t.number_or("yaw_arcsec_per_100mm", 0, arcsec);
+  angular->yaw_arcsec_per_100mm2 = t.number_or("yaw_arcsec_per_100mm2", 0, arcsec);
   const auto get = [&t](const char* key, const config::NumberRule& rule) {
     return t.optional_number(key, rule);
   };
@@ -108,6 +125,26 @@ AxisRealism read_bench_axis(config::Table t) {
   a.vibration_decay_s = get("vibration_decay_s", within(1e-4, 100));
   t.reject_unknown();
   return a;
+}
+
+void read_target(config::Table t, RealismProfile* p) {
+  p->print_scale_error = t.number_or("print_scale_error", 0, within(-0.05, 0.05));
+  scene::SceneOptions& o = p->scene;
+  o.bow_sag_m = t.number_or("bow_sag_mm", 0, within(0, 50)) / 1000;
+  const std::string shape =
+      t.string_or("bow_shape", "dome", "\"dome\", \"cylinder_x\" or \"cylinder_y\"");
+  if (shape == "dome") {
+    o.bow_shape = scene::SceneOptions::BowShape::kDome;
+  } else if (shape == "cylinder_x") {
+    o.bow_shape = scene::SceneOptions::BowShape::kCylinderX;
+  } else if (shape == "cylinder_y") {
+    o.bow_shape = scene::SceneOptions::BowShape::kCylinderY;
+  } else {
+    t.fail("bow_shape", "\"dome\", \"cylinder_x\" or \"cylinder_y\"");
+  }
+  o.paper_gloss = t.number_or("paper_gloss", o.paper_gloss, within(0, 100));
+  o.ink_gloss = t.number_or("ink_gloss", o.ink_gloss, within(0, 100));
+  t.reject_unknown();
 }
 
 void apply_axis(const AxisRealism& r, bench::AxisConfig* a) {
@@ -156,7 +193,39 @@ nlohmann::json pose_json(const vision::Pose& T) {
   return {{"R", R}, {"t_m", {T.t.x(), T.t.y(), T.t.z()}}};
 }
 
+double arcsec_profile_rad(double a, double b, double s_mm) {
+  const double s = s_mm / 100;
+  return (a * s + b * s * s) * M_PI / (180.0 * 3600.0);
+}
+
 }  // namespace
+
+double AxisAngularError::pitch_rad(double s_mm) const {
+  return arcsec_profile_rad(pitch_arcsec_per_100mm, pitch_arcsec_per_100mm2, s_mm);
+}
+double AxisAngularError::yaw_rad(double s_mm) const {
+  return arcsec_profile_rad(yaw_arcsec_per_100mm, yaw_arcsec_per_100mm2, s_mm);
+}
+
+Eigen::Vector3d CarriageAttitude::rotation_vector_rad(double x_mm, double y_mm) const {
+  return {y.pitch_rad(y_mm), x.pitch_rad(x_mm), x.yaw_rad(x_mm) + y.yaw_rad(y_mm)};
+}
+
+vision::Pose CarriageAttitude::T_cam_target(const vision::RigGeometry& geometry, double x_mm,
+                                            double y_mm) const {
+  if (zero()) return geometry.T_cam_target(x_mm, y_mm);
+  vision::Pose T_bench_cam =
+      vision::RigGeometry::T_bench_carriage(x_mm, y_mm) * geometry.T_carriage_cam;
+  const Eigen::Vector3d w = rotation_vector_rad(x_mm, y_mm);
+  const Eigen::Matrix3d turn = w.norm() > 0
+                                   ? Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix()
+                                   : Eigen::Matrix3d::Identity();
+  const Eigen::Vector3d lever = abbe_offset_mm / 1000;
+  const Eigen::Vector3d pivot = T_bench_cam.t - lever;
+  T_bench_cam.R = turn * T_bench_cam.R;
+  T_bench_cam.t = pivot + turn * lever;
+  return T_bench_cam.inverse() * geometry.T_bench_target;
+}
 
 RealismProfile ideal_realism() {
   return RealismProfile{};
@@ -171,15 +240,21 @@ RealismProfile load_realism_profile(const std::string& path) {
     root.fail("name", "a name of 1 to 22 characters (the camera reports \"realism NAME\")");
   read_camera_truth(root.optional_table("camera_truth"), &p);
   read_rig_truth(root.optional_table("rig_truth"), &p.truth);
-  config::Table target = root.optional_table("target");
-  p.print_scale_error = target.number_or("print_scale_error", 0, within(-0.05, 0.05));
-  target.reject_unknown();
+  read_target(root.optional_table("target"), &p);
   config::Table sensor = root.optional_table("sensor");
   read_colour_filter(sensor, &p);
   read_scene(root.optional_table("light"), root.optional_table("optics"), sensor, &p.scene);
   config::Table bench = root.optional_table("bench");
-  p.bench_x = read_bench_axis(bench.optional_table("x"));
-  p.bench_y = read_bench_axis(bench.optional_table("y"));
+  p.bench_x = read_bench_axis(bench.optional_table("x"), &p.attitude.x);
+  p.bench_y = read_bench_axis(bench.optional_table("y"), &p.attitude.y);
+  if (bench.has("abbe_offset_mm")) {
+    const std::vector<double> v =
+        bench.numbers("abbe_offset_mm", 3, 3, "[x, y, z] in mm, three numbers");
+    for (size_t k = 0; k < 3; ++k) {
+      if (std::abs(v[k]) > 2000) bench.fail("abbe_offset_mm", "each of x, y, z within +-2000 mm");
+      p.attitude.abbe_offset_mm[static_cast<Eigen::Index>(k)] = v[k];
+    }
+  }
   bench.reject_unknown();
   root.reject_unknown();
   return p;

@@ -114,6 +114,11 @@ struct CameraServer::Impl {
   mutable std::mutex mutex;  // guards last
   Exposure last;
   std::atomic<uint64_t> frames{0};
+  const std::chrono::steady_clock::time_point epoch = std::chrono::steady_clock::now();
+
+  vision::Pose pose_at(double x_mm, double y_mm) const {
+    return server->pose_ ? server->pose_(x_mm, y_mm) : server->geometry_.T_cam_target(x_mm, y_mm);
+  }
 
   // ArvFakeCameraFillPattern: runs on Aravis's camera thread, under its fill mutex.
   static void fill(ArvBuffer* buffer, void* data, guint32 exposure_us, guint32 gain,
@@ -123,6 +128,8 @@ struct CameraServer::Impl {
 
   void render_into(ArvBuffer* buffer, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
     const CameraServerOptions& options = server->options_;
+    const double start_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch).count();
     const auto [x0, y0] = server->position_();
     double x1 = x0, y1 = y0;
     if (options.real_time_exposure) {
@@ -134,7 +141,7 @@ struct CameraServer::Impl {
     }
     const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
     const uint64_t seed = options.seed + frame_id;
-    const vision::Pose T0 = server->geometry_.T_cam_target(x0, y0);
+    const vision::Pose T0 = pose_at(x0, y0);
     // A carriage that moved less than 1 µm during the exposure is static: the
     // blur would be far below a pixel and render() is several times cheaper.
     const bool moved = std::hypot(x1 - x0, y1 - y0) >= 1e-3;
@@ -142,11 +149,9 @@ struct CameraServer::Impl {
     // noise grow with it, dark signal too); the gain (GainRaw read as dB)
     // amplifies signal and noise alike.
     const scene::SensorExposure sensor{exposure_us / options.nominal_exposure_us,
-                                       exposure_us * 1e-6, std::pow(10.0, gain / 20.0)};
+                                       exposure_us * 1e-6, std::pow(10.0, gain / 20.0), start_s};
     const cv::Mat image =
-        moved ? server->renderer_
-                    ->render_moving(T0, server->geometry_.T_cam_target(x1, y1), seed, sensor)
-                    .image
+        moved ? server->renderer_->render_moving(T0, pose_at(x1, y1), seed, sensor).image
               : server->renderer_->render(T0, seed, sensor).image;
     copy_region(buffer, image, format);
     {

@@ -65,6 +65,22 @@ void validate(const SceneOptions& o) {
   check(o.prnu_rel >= 0 && o.prnu_rel <= 0.2, "prnu_rel", o.prnu_rel, "0 .. 0.2");
   check(o.dsnu_electrons >= 0, "dsnu_electrons", o.dsnu_electrons, ">= 0");
   check(o.motion_blur_samples >= 1, "motion_blur_samples", o.motion_blur_samples, ">= 1");
+  check(o.glare_peak >= 0 && o.glare_peak <= 100, "glare_peak", o.glare_peak, "0 (off) .. 100");
+  check(o.glare_lobe_deg > 0 && o.glare_lobe_deg <= 90, "glare_lobe_deg", o.glare_lobe_deg,
+        "in (0, 90] degrees");
+  check(o.glare_light_tilt_deg >= 0 && o.glare_light_tilt_deg < 90, "glare_light_tilt_deg",
+        o.glare_light_tilt_deg, "0 .. 90 degrees from the sheet's normal");
+  check(std::isfinite(o.glare_light_azimuth_deg), "glare_light_azimuth_deg",
+        o.glare_light_azimuth_deg, "a finite number");
+  check(o.paper_gloss >= 0 && o.paper_gloss <= 100, "paper_gloss", o.paper_gloss, "0 .. 100");
+  check(o.ink_gloss >= 0 && o.ink_gloss <= 100, "ink_gloss", o.ink_gloss, "0 .. 100");
+  check(o.flicker_modulation >= 0 && o.flicker_modulation <= 1, "flicker_modulation",
+        o.flicker_modulation, "0 .. 1");
+  check(o.flicker_frequency_hz > 0 && o.flicker_frequency_hz <= 1e5, "flicker_frequency_hz",
+        o.flicker_frequency_hz, "in (0, 1e5] Hz");
+  check(std::isfinite(o.flicker_phase_deg), "flicker_phase_deg", o.flicker_phase_deg,
+        "a finite number");
+  check(o.bow_sag_m >= 0 && o.bow_sag_m <= 0.05, "bow_sag_m", o.bow_sag_m, "0 .. 0.05 m");
 }
 
 // Outline of a marker's black square, kPerSide points per side, target frame.
@@ -82,6 +98,7 @@ struct SceneRenderer::Impl {
   detail::SheetArtwork back;
   detail::NormalTable normal;
   detail::FixedPattern pattern;
+  detail::SheetBow bow;
 
   Impl(const vision::Camera& c, const vision::Target& t, const vision::Codebook& codebook,
        const SceneOptions& o)
@@ -93,14 +110,17 @@ struct SceneRenderer::Impl {
         front(t, codebook, true),
         back(t, codebook, false),
         pattern(detail::make_fixed_pattern(c.width_px(), c.height_px(), o.prnu_rel,
-                                           o.dsnu_electrons, o.fixed_pattern_seed)) {}
+                                           o.dsnu_electrons, o.fixed_pattern_seed)),
+        bow(o, t) {}
 
   cv::Mat sensor(const cv::Mat& ideal, uint64_t seed, const SensorExposure& e) const {
+    // The lamps' flicker scales every photon of the exposure alike.
+    const double flicker = flicker_gain(options, e.start_time_s, e.exposure_time_s);
     const detail::SensorModel model{options.full_well_electrons,
                                     options.read_noise_electrons,
                                     options.adc_bits,
                                     options.noise,
-                                    e.signal_scale,
+                                    e.signal_scale * flicker,
                                     options.dark_current_e_per_s * e.exposure_time_s,
                                     e.gain};
     return detail::apply_sensor(ideal, model, normal, seed, pattern);
@@ -121,14 +141,15 @@ std::vector<MarkerTruth> SceneRenderer::Impl::truth(const vision::Pose& T) const
   if ((-(T.R.transpose() * T.t)).z() >= 0) return result;  // printed side faces away
   const double w = camera.width_px() - 1, h = camera.height_px() - 1;
   for (const vision::TargetMarker& m : target.markers) {
-    const Eigen::Vector3d centre = T * Eigen::Vector3d(m.centre_m.x(), m.centre_m.y(), 0);
+    const Eigen::Vector3d centre =
+        T * bow.surface(Eigen::Vector3d(m.centre_m.x(), m.centre_m.y(), 0));
     if (centre.z() <= 0) continue;
     MarkerTruth t;
     t.id = m.id;
-    const auto corners = target.corners_m(m);
+    const auto corners = target.corners_m(m);  // on the plane; bow.surface raises them
     bool in_front = true;
     for (int k = 0; k < 4; ++k) {
-      const Eigen::Vector3d p = T * corners[k];
+      const Eigen::Vector3d p = T * bow.surface(corners[k]);
       in_front = in_front && p.z() > 0;
       t.corners_px[k] = p.z() > 0
                             ? lens.project(p)
@@ -139,7 +160,7 @@ std::vector<MarkerTruth> SceneRenderer::Impl::truth(const vision::Pose& T) const
       for (int s = 0; s < kOutlinePerSide; ++s) {
         const double f = static_cast<double>(s) / kOutlinePerSide;
         const Eigen::Vector2d px =
-            lens.project(T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]));
+            lens.project(T * bow.surface((1 - f) * corners[k] + f * corners[(k + 1) % 4]));
         distance = std::min({distance, px.x(), px.y(), w - px.x(), h - px.y()});
       }
     }
@@ -200,7 +221,7 @@ void SceneRenderer::Impl::mark_occlusions(const vision::Pose& T,
     for (int k = 0; k < 4; ++k) {
       for (int s = 0; s < kOutlinePerSide; ++s) {
         const double f = static_cast<double>(s) / kOutlinePerSide;
-        const Eigen::Vector3d p = T * ((1 - f) * corners[k] + f * corners[(k + 1) % 4]);
+        const Eigen::Vector3d p = T * bow.surface((1 - f) * corners[k] + f * corners[(k + 1) % 4]);
         ok = ok && p.z() > 0;
         if (!ok) break;
         const Eigen::Vector2d px = lens.project(p);
@@ -240,7 +261,7 @@ cv::Mat SceneRenderer::Impl::irradiance(const vision::Pose* poses, int count, ui
   }
   cv::Mat radiance(size, CV_32FC1, cv::Scalar(0));
   for (int k = 0; k < count; ++k) {
-    detail::accumulate_radiance(rays, front, back, options, poses[k], background,
+    detail::accumulate_radiance(rays, front, back, options, bow, poses[k], background,
                                 1.0f / static_cast<float>(count), radiance);
   }
   std::vector<MarkerTruth> truths = truth(truth_pose);
@@ -260,6 +281,21 @@ cv::Mat SceneRenderer::Impl::irradiance(const vision::Pose* poses, int count, ui
   for (size_t i = 0, n = radiance.total(); i < n; ++i)
     r[i] *= scale * g[i];
   return radiance;
+}
+
+double flicker_gain(const SceneOptions& o, double start_time_s, double exposure_time_s) {
+  if (o.flicker_modulation == 0) return 1;
+  const double w = 2 * M_PI * o.flicker_frequency_hz;
+  const double half = 0.5 * w * exposure_time_s;
+  const double sinc = half > 1e-9 ? std::sin(half) / half : 1.0;
+  const double phase =
+      w * (start_time_s + 0.5 * exposure_time_s) + o.flicker_phase_deg * M_PI / 180;
+  return 1 + o.flicker_modulation * sinc * std::sin(phase);
+}
+
+double sheet_sag_m(const SceneOptions& options, const vision::Target& target, double x_m,
+                   double y_m) {
+  return detail::SheetBow(options, target)(x_m, y_m);
 }
 
 double defocus_sigma_px(const SceneOptions& o, double fx_px, double depth_m) {
@@ -291,6 +327,7 @@ static void check_exposure(const SensorExposure& e) {
   if (!(e.exposure_time_s >= 0 && std::isfinite(e.exposure_time_s)))
     fail("exposure_time_s", e.exposure_time_s, "a finite number >= 0");
   if (!(e.gain > 0 && std::isfinite(e.gain))) fail("gain", e.gain, "a finite number > 0");
+  if (!std::isfinite(e.start_time_s)) fail("start_time_s", e.start_time_s, "a finite number");
 }
 
 RenderedFrame SceneRenderer::render(const vision::Pose& T_cam_target, uint64_t seed) const {

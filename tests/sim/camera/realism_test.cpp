@@ -323,4 +323,125 @@ TEST(Realism, PrintScaleErrorShortensEverySolversDistance) {
   EXPECT_GE(compared, 3 * 10);  // every solver converged on both scopes at most distances
 }
 
+// Abbe error: the carriage pitching by theta about the guide's pivot moves
+// the optical centre, h above it, by h theta along the travel (towards the
+// target for a positive pitch about bench y) and turns the camera by theta;
+// a yaw with the camera beside (y) or ahead of (x) the pivot moves it along
+// x or y by the lever times the angle. First order in theta: the second-order
+// rest, lever x theta^2 / 2 (1.3e-8 m for 120 mm and 96 arcsec), bounds the
+// tolerance of 2e-8 m, against an effect of 5.6e-5 m.
+TEST(Realism, CarriagePitchAndYawMoveTheCameraByLeverArmTimesAngle) {
+  const vision::RigGeometry g = nominal_geometry();
+  const auto centre_in_bench = [&g](const vision::Pose& T_cam_target) {
+    return (g.T_bench_target * T_cam_target.inverse()).t;
+  };
+  constexpr double kArcsec = M_PI / (180.0 * 3600.0);
+  const double x_mm = 600, y_mm = 150;
+  sim::camera::CarriageAttitude pitch;
+  pitch.x.pitch_arcsec_per_100mm = 10;  // 60 arcsec at 600 mm
+  pitch.x.pitch_arcsec_per_100mm2 = 1;  // + 36 arcsec
+  pitch.abbe_offset_mm = {0, 0, 120};
+  const double theta = (60 + 36) * kArcsec;
+  EXPECT_NEAR(pitch.x.pitch_rad(x_mm), theta, 1e-15);
+  const vision::Pose flat = g.T_cam_target(x_mm, y_mm), turned = pitch.T_cam_target(g, x_mm, y_mm);
+  const Eigen::Vector3d moved = centre_in_bench(turned) - centre_in_bench(flat);
+  EXPECT_NEAR(moved.x(), 0.120 * theta, 2e-8);  // 55.8 um
+  EXPECT_NEAR(moved.y(), 0, 2e-8);
+  EXPECT_NEAR(moved.z(), 0, 2e-8);
+  EXPECT_NEAR(vision::rotation_angle_between(flat.R, turned.R), theta, 1e-12);
+  // The distance to the target (along +x) shrinks by the Abbe error.
+  EXPECT_NEAR(flat.distance_m() - turned.distance_m(),
+              0.120 * theta * (g.T_bench_target.t - centre_in_bench(flat)).normalized().x(), 2e-8);
+
+  sim::camera::CarriageAttitude yaw;
+  yaw.y.yaw_arcsec_per_100mm = 20;  // 30 arcsec at y = 150 mm
+  yaw.abbe_offset_mm = {80, 50, 0};
+  const double psi = 30 * kArcsec;
+  const Eigen::Vector3d shift =
+      centre_in_bench(yaw.T_cam_target(g, x_mm, y_mm)) - centre_in_bench(flat);
+  EXPECT_NEAR(shift.x(), -0.050 * psi, 2e-8);  // w x lever = (0, 0, psi) x (80, 50, 0) mm
+  EXPECT_NEAR(shift.y(), 0.080 * psi, 2e-8);
+  EXPECT_NEAR(shift.z(), 0, 2e-8);
+
+  // No angular error: exactly the geometry's pose.
+  const sim::camera::CarriageAttitude none;
+  EXPECT_TRUE(none.zero());
+  EXPECT_EQ(none.T_cam_target(g, x_mm, y_mm).t, flat.t);
+}
+
+// The shipped profiles' new terms: ideal has none, lab and paper have each
+// (the paper's rig the worse), and the sim rig's camera maps positions through
+// the attitude while the bench (its encoders) never sees it.
+TEST(Realism, ProfilesCarryGlareFlickerBowAndCarriageAttitude) {
+  const sim::camera::RealismProfile ideal = shipped("ideal"), lab = shipped("lab"),
+                                    paper = shipped("paper");
+  const sim::scene::SceneOptions d;
+  EXPECT_EQ(ideal.scene.glare_peak, 0);
+  EXPECT_EQ(ideal.scene.flicker_modulation, 0);
+  EXPECT_EQ(ideal.scene.bow_sag_m, 0);
+  EXPECT_EQ(ideal.scene.ink_gloss, d.ink_gloss);
+  EXPECT_TRUE(ideal.attitude.zero());
+  for (const auto* p : {&lab, &paper}) {
+    EXPECT_GT(p->scene.glare_peak, 0) << p->name;
+    EXPECT_GT(p->scene.flicker_modulation, 0) << p->name;
+    EXPECT_GT(p->scene.bow_sag_m, 0) << p->name;
+    EXPECT_GT(p->scene.ink_gloss, p->scene.paper_gloss) << p->name;
+    EXPECT_FALSE(p->attitude.zero()) << p->name;
+    EXPECT_GT(p->attitude.abbe_offset_mm.norm(), 0) << p->name;
+  }
+  EXPECT_GT(paper.scene.bow_sag_m, lab.scene.bow_sag_m);
+  EXPECT_EQ(paper.scene.bow_shape, sim::scene::SceneOptions::BowShape::kCylinderX);
+  EXPECT_EQ(lab.attitude.abbe_offset_mm, Eigen::Vector3d(0, 0, 60));
+  EXPECT_EQ(paper.attitude.x.pitch_arcsec_per_100mm, 10.0);
+  EXPECT_EQ(lab.scene.flicker_frequency_hz, 120.0);
+  EXPECT_NE(profile_error("[target]\nbow_shape = \"saddle\"\n")
+                .find("target.bow_shape = \"saddle\": expected \"dome\", \"cylinder_x\" or "
+                      "\"cylinder_y\""),
+            std::string::npos);
+  EXPECT_NE(profile_error("[bench]\nabbe_offset_mm = [0, 0]\n").find("bench.abbe_offset_mm"),
+            std::string::npos);
+  EXPECT_NE(profile_error("[light]\nflicker_modulation = 1.5\n")
+                .find("light.flicker_modulation = 1.5: expected a number in 0 .. 1"),
+            std::string::npos);
+}
+
+// Bow: a marker at sag h appears h closer. The pose marker sits at the
+// sheet's centre, under the dome's apex; its corners, 25 mm out, carry
+// h_c = sag (1 - (25/105)^2 / 2 - (25/148.5)^2 / 2) = 0.957 sag, so every
+// solver's plane through them moves h_c towards the camera along the sheet's
+// normal: |t - h_c n| - |t|. Noise-free renders, so both frames differ only by
+// the bow; the corners' deterministic bias (~0.005 px on a ~150 px marker at
+// 0.25-0.35 m: 0.01 mm of distance) is far inside 0.06 mm, while the effect is
+// 1.9 mm.
+TEST(Realism, BowBringsTheMarkerCloserByItsSag) {
+  const vision::Camera camera = vision::Camera::paper_default();
+  const vision::Target target = vision::Target::paper_default();
+  sim::scene::SceneOptions bowed = noise_free();
+  bowed.bow_sag_m = 0.002;
+  const sim::scene::SceneRenderer flat(camera, target, vision::Codebook(), noise_free());
+  const sim::scene::SceneRenderer bent(camera, target, vision::Codebook(), bowed);
+  const vision::FrameMeasurer measurer(camera, target);
+  const auto corners = target.corners_m(target.pose_marker_id);
+  double h_c = 0;
+  for (const auto& c : corners)
+    h_c += sim::scene::sheet_sag_m(bowed, target, c.x(), c.y()) / 4;
+  EXPECT_NEAR(h_c, 0.002 * 0.957, 2e-6);
+  int compared = 0;
+  for (double d : {0.25, 0.35}) {
+    const vision::Pose T = facing(d);
+    const double expected = (T.t - h_c * T.R.col(2)).norm() - T.t.norm();
+    const auto ref = measurer.measure(flat.render(T, 1).image);
+    const auto got = measurer.measure(bent.render(T, 1).image);
+    ASSERT_EQ(ref.estimates.size(), got.estimates.size()) << d;
+    for (size_t i = 0; i < ref.estimates.size(); ++i) {
+      if (ref.estimates[i].scope != std::to_string(target.pose_marker_id)) continue;
+      const vision::Estimate &e0 = ref.estimates[i].estimate, &e1 = got.estimates[i].estimate;
+      if (!e0.converged || !e1.converged) continue;
+      EXPECT_NEAR(e1.distance_m - e0.distance_m, expected, 6e-5) << e0.solver << " at " << d;
+      ++compared;
+    }
+  }
+  EXPECT_GE(compared, 2 * 8);
+}
+
 }  // namespace

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <opencv2/imgproc.hpp>
 
+#include "vision/detector.hpp"
+
 namespace sim::scene {
 namespace {
 
@@ -459,6 +461,215 @@ TEST(SceneRenderer, LightingGradientScalesThePaperAlongItsDirection) {
   // Rounding a point to its pixel moves it by <= 0.5 px = 0.35 mm at 0.5 m:
   // a ratio error of 0.8 * 0.00035 = 3e-4.
   EXPECT_NEAR(ib / ia, (1 + 0.8 * 0.07) / (1 - 0.8 * 0.07), 1e-3);
+}
+
+// The glare lobe is the lamp's mirror image: every pixel's added radiance is
+// glare_peak x 255 x exposure x exp(-(1 - cos a) / sigma^2), a the angle
+// between the pixel's ray (Camera::undistort_point) and the mirror direction
+// turned into the camera frame, so the spot follows the camera's rotation.
+// Noise-free irradiance, paper and ink gloss equal (the glare does not depend
+// on what is printed), and at 0.12 m the sheet fills the image. The tile's
+// bilinear lobe is exact to (8 px)^2 / 8 x peak / (fx sigma)^2 ~ 1e-3 of the
+// peak (geometry.cpp): 2e-3 of it is the tolerance. Then a strong lamp
+// saturates the well.
+TEST(SceneRenderer, GlareSpotIsTheLampsMirrorLobeAndSaturates) {
+  SceneOptions plain = geometry_only();
+  SceneOptions o = plain;
+  o.glare_peak = 0.4;
+  o.glare_lobe_deg = 7;
+  o.glare_light_tilt_deg = 12;
+  o.glare_light_azimuth_deg = 30;
+  const vision::Camera camera = vision::Camera::paper_default();
+  const SceneRenderer flat(camera, vision::Target::paper_default(), codebook(), plain);
+  const SceneRenderer glossy(camera, vision::Target::paper_default(), codebook(), o);
+  const double tilt = o.glare_light_tilt_deg * M_PI / 180,
+               az = o.glare_light_azimuth_deg * M_PI / 180;
+  const double sigma = o.glare_lobe_deg * M_PI / 180;
+  const Eigen::Vector3d mirror_ray(std::sin(tilt) * std::cos(az), std::sin(tilt) * std::sin(az),
+                                   std::cos(tilt));
+  const double top = 255 * o.exposure * o.glare_peak;
+  for (const vision::Pose& T : {pose(0.12, 0, 0, 0), pose(0.12, 4, -3, 0)}) {
+    const cv::Mat glare = glossy.render_irradiance(T, 1) - flat.render_irradiance(T, 1);
+    const Eigen::Vector3d d = (T.R * mirror_ray).normalized();
+    double worst = 0, highest = 0;
+    for (int v = 0; v < glare.rows; v += 7) {
+      for (int u = 0; u < glare.cols; u += 7) {
+        Eigen::Vector2d xy;
+        ASSERT_TRUE(camera.undistort_point(Eigen::Vector2d(u, v), &xy));
+        const double c = Eigen::Vector3d(xy.x(), xy.y(), 1).normalized().dot(d);
+        const double expected = top * std::exp(-(1 - c) / (sigma * sigma));
+        worst = std::max(worst, std::abs(glare.at<float>(v, u) - expected));
+        highest = std::max(highest, static_cast<double>(glare.at<float>(v, u)));
+      }
+    }
+    EXPECT_LT(worst, 2e-3 * top);
+    EXPECT_GT(highest, 0.99 * top);  // the spot is in the image
+  }
+  // A strong lamp saturates the well: paper 0.85 + 1.5 glare at exposure 0.9 is 2.1 x full.
+  SceneOptions strong = o;
+  strong.glare_peak = 1.5;
+  strong.noise = true;
+  const SceneRenderer blinding(camera, vision::Target::paper_default(), codebook(), strong);
+  const vision::Pose T = pose(0.12, 0, 0, 0);
+  const Eigen::Vector2d c = camera.project(T.R * mirror_ray);
+  const cv::Mat image = blinding.render(T, 3).image;
+  const cv::Rect spot(static_cast<int>(c.x()) - 5, static_cast<int>(c.y()) - 5, 11, 11);
+  double lowest = 0;
+  cv::minMaxLoc(image(spot), &lowest);
+  EXPECT_EQ(lowest, 255) << "the spot's centre saturates, on paper and on ink alike";
+}
+
+// Gloss: toner that reflects ink_gloss times the paper's specular light gets
+// ink_gloss times the glare the paper gets at the same pixel; matte paper is
+// unchanged. Uniform ink and paper pixels (their glare-free value is exactly
+// the reflectance's) compared at gloss 1 and 3: exact but for float rounding
+// and the bilinear lobe, which is the same in both renders.
+TEST(SceneRenderer, InkGlossRaisesTheGlareOnTonerOnly) {
+  SceneOptions plain = geometry_only();
+  SceneOptions o = plain;
+  o.glare_peak = 0.2;
+  o.glare_lobe_deg = 10;
+  o.glare_light_tilt_deg = 5;
+  SceneOptions toner = o;
+  toner.ink_gloss = 3;
+  const vision::Camera camera = vision::Camera::paper_default();
+  const vision::Target target = vision::Target::paper_default();
+  const SceneRenderer r0(camera, target, codebook(), plain), r1(camera, target, codebook(), o),
+      r3(camera, target, codebook(), toner);
+  const vision::Pose T = pose(0.15, 0, 0, 0);
+  const cv::Mat i0 = r0.render_irradiance(T, 1), i1 = r1.render_irradiance(T, 1),
+                i3 = r3.render_irradiance(T, 1);
+  const float ink = static_cast<float>(dn_of(o.ink_reflectance, o));
+  const float paper = static_cast<float>(dn_of(o.paper_reflectance, o));
+  int ink_pixels = 0, paper_pixels = 0;
+  for (int v = 0; v < i0.rows; ++v) {
+    for (int u = 0; u < i0.cols; ++u) {
+      const float base = i0.at<float>(v, u), g1 = i1.at<float>(v, u) - base,
+                  g3 = i3.at<float>(v, u) - base;
+      if (g1 < 1) continue;  // outside the spot
+      if (std::abs(base - ink) < 1e-3f) {
+        EXPECT_NEAR(g3, 3 * g1, 1e-3 * g1 + 1e-3) << u << "," << v;
+        ++ink_pixels;
+      } else if (std::abs(base - paper) < 1e-3f) {
+        EXPECT_NEAR(g3, g1, 1e-3) << u << "," << v;
+        ++paper_pixels;
+      }
+    }
+  }
+  EXPECT_GT(ink_pixels, 1000);
+  EXPECT_GT(paper_pixels, 1000);
+}
+
+// Flicker: the exposure-averaged lamp intensity is the closed form
+// 1 + m sinc(pi f T) sin(2 pi f (t0 + T/2) + phase), checked against a
+// midpoint-rule integral of 1 + m sin(2 pi f t + phase) (200000 steps: error
+// ~ (f T)^2 / N^2 ~ 1e-11); it vanishes when T covers whole periods.
+TEST(SceneRenderer, FlickerIsTheLampSineAveragedOverTheExposure) {
+  SceneOptions o;
+  o.flicker_modulation = 0.3;
+  o.flicker_frequency_hz = 120;
+  o.flicker_phase_deg = 40;
+  const double w = 2 * M_PI * o.flicker_frequency_hz, phase = 40 * M_PI / 180;
+  for (const double T : {0.0005, 0.004, 0.01, 0.025}) {
+    for (const double t0 : {0.0, 0.0013, 1.234}) {
+      constexpr int kSteps = 200000;
+      double sum = 0;
+      for (int k = 0; k < kSteps; ++k)
+        sum += 1 + 0.3 * std::sin(w * (t0 + (k + 0.5) * T / kSteps) + phase);
+      EXPECT_NEAR(flicker_gain(o, t0, T), sum / kSteps, 1e-9) << T << " s from " << t0;
+    }
+  }
+  o.flicker_frequency_hz = 100;
+  for (const double t0 : {0.0, 0.003, 0.0071})
+    EXPECT_NEAR(flicker_gain(o, t0, 0.01), 1.0, 1e-12) << "one whole period at " << t0;
+  o.flicker_modulation = 0;
+  EXPECT_EQ(flicker_gain(o, 0.0021, 0.003), 1.0);
+}
+
+// ... and it modulates the frame: the mean of a frame exposed at the
+// flicker's crest over one at its trough is (1 + m s) / (1 - m s), s =
+// sinc(pi f T), here m = 0.2, f = 120 Hz, T = 10 ms: s = -0.1559 (1.2 periods),
+// ratio 1 / 1.0644.
+// The frame mean's noise: ~1.7 DN per pixel over 420,000 pixels, 0.003 DN
+// on ~130 DN, 2e-5 relative per frame; 5e-4 on the ratio is > 15 sigma
+// (false failure < 1e-40). Without flicker the ratio is 1 within the same.
+TEST(SceneRenderer, FlickerVariesTheFrameMeanByTheDerivedAmplitude) {
+  SceneOptions o;
+  o.flicker_modulation = 0.2;
+  o.flicker_frequency_hz = 120;
+  const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
+                        codebook(), o);
+  const double T = 0.01, f = o.flicker_frequency_hz;
+  const double s = std::sin(M_PI * f * T) / (M_PI * f * T);
+  // sin(2 pi f (t0 + T / 2)) = +1 at t0 = 1 / (4 f) - T / 2, -1 half a period later.
+  const double crest = 1 / (4 * f) - T / 2 + 10 / f, trough = crest + 0.5 / f;
+  const vision::Pose P = pose(0.4, 10, 5, 0);
+  const double high = cv::mean(r.render(P, 1, {1, T, 1, crest}).image)[0];
+  const double low = cv::mean(r.render(P, 2, {1, T, 1, trough}).image)[0];
+  EXPECT_NEAR(high / low, (1 + 0.2 * s) / (1 - 0.2 * s), 5e-4);
+  EXPECT_GT(std::abs(high / low - 1), 0.05);  // s < 0 here: the crest's exposure is the dimmer
+  const SceneRenderer steady(vision::Camera::paper_default(), vision::Target::paper_default(),
+                             codebook(), SceneOptions{});
+  EXPECT_NEAR(cv::mean(steady.render(P, 1, {1, T, 1, crest}).image)[0] /
+                  cv::mean(steady.render(P, 2, {1, T, 1, trough}).image)[0],
+              1.0, 5e-4);
+}
+
+// Bow: the ground truth of a bowed sheet is the projection of its corners
+// raised by the sag (a dome: h = sag (1 - u^2 / 2 - v^2 / 2)), and the image
+// shows the edges there: the detector's corners on the noise-free image lie
+// within 0.12 px of the bowed truth, while the flat sheet's truth is > 0.3 px
+// away. The detector fits straight sides (~0.02 px on a flat sheet) to edges
+// that the bow curves: the side's midpoint lies sag x (25 / 105)^2 / 2 =
+// 0.11 mm nearer than its chord, ~0.05-0.08 px in the image 100-200 px off
+// the principal point at 0.35 m, which the tolerance allows.
+TEST(SceneRenderer, BowedSheetRaisesEveryCornerByItsSag) {
+  SceneOptions o = geometry_only();
+  o.blur_sigma_px = 1.0;
+  o.bow_sag_m = 0.004;
+  SceneOptions flat_options = o;
+  flat_options.bow_sag_m = 0;
+  const vision::Camera camera = vision::Camera::paper_default();
+  const vision::Target target = vision::Target::paper_default();
+  const SceneRenderer r(camera, target, codebook(), o),
+      flat(camera, target, codebook(), flat_options);
+  const vision::Pose T = pose(0.35, 15, -10, 5, {0.01, 0.0});
+  const RenderedFrame frame = r.render(T, 1);
+  ASSERT_EQ(frame.markers.size(), target.markers.size());
+  // The sheet's centre carries the full sag, its corners none.
+  const double cx = target.sheet_origin_m.x() + target.sheet_width_m / 2;
+  const double cy = target.sheet_origin_m.y() + target.sheet_height_m / 2;
+  EXPECT_DOUBLE_EQ(sheet_sag_m(o, target, cx, cy), 0.004);
+  EXPECT_NEAR(sheet_sag_m(o, target, target.sheet_origin_m.x(), target.sheet_origin_m.y()), 0,
+              1e-15);
+  EXPECT_DOUBLE_EQ(sheet_sag_m(o, target, cx + target.sheet_width_m / 2, cy), 0.002);
+  for (const MarkerTruth& m : frame.markers) {
+    const auto corners = target.corners_m(m.id);
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector3d& c = corners[k];
+      const double h = sheet_sag_m(o, target, c.x(), c.y());
+      EXPECT_GT(h, 0.001);
+      const Eigen::Vector2d expected = camera.project(T * Eigen::Vector3d(c.x(), c.y(), -h));
+      EXPECT_LT((m.corners_px[k] - expected).norm(), 1e-9) << "marker " << m.id << " corner " << k;
+    }
+  }
+  const vision::Detector detector(camera, codebook());
+  const std::vector<vision::Detection> found = detector.detect(frame.image);
+  const std::vector<MarkerTruth> flat_truth = flat.ground_truth(T);
+  int matched = 0;
+  for (const vision::Detection& d : found) {
+    for (size_t i = 0; i < frame.markers.size(); ++i) {
+      if (frame.markers[i].id != d.id || !frame.markers[i].fully_visible) continue;
+      for (int k = 0; k < 4; ++k) {
+        EXPECT_LT((d.corners_px[k] - frame.markers[i].corners_px[k]).norm(), 0.12)
+            << "marker " << d.id << " corner " << k;
+        EXPECT_GT((flat_truth[i].corners_px[k] - frame.markers[i].corners_px[k]).norm(), 0.3)
+            << "marker " << d.id << " corner " << k;
+      }
+      ++matched;
+    }
+  }
+  EXPECT_EQ(matched, static_cast<int>(frame.markers.size()));
 }
 
 // A 4-bit ADC leaves only multiples of 16 DN.

@@ -202,11 +202,18 @@ struct DetectorParameters {
   // crumpled sheet, a shadow edge, a non-marker). Raise it for poor optics.
   double max_edge_residual_px = 0.35;
 
-  // Margin (pixels) that a side and its search window must keep from the
-  // image border. Sides that reach into it are cut by the border and reject
-  // the marker. Smaller keeps markers closer to the border; below 1 px the
-  // edge profile would be read from the replicated border.
+  // Margin (pixels) that a side's samples must keep from the image border
+  // (their windows are cut there, see min_edge_window_px). Smaller keeps markers closer to the
+  // border; below 1 px the edge profile would be read from the replicated border.
   double image_border_margin_px = 1.0;
+  // Near the image border a side's profile windows (edge_search_px,
+  // edge_refine_px each way) are cut to the part inside the margin, but
+  // either side of the edge must keep at least this much (pixels): the
+  // window's ends must lie on the black and the white plateaus for the
+  // equal-area position to be unbiased, i.e. beyond the edge's blur (~2
+  // sigma of a PSF of up to 1 px). A marker whose outline comes nearer the
+  // border than image_border_margin_px + this is cut by it.
+  double min_edge_window_px = 2.0;
 
   // A refined corner may move at most this far (pixels) from the candidate
   // polygon's vertex, and at most 30 % of the candidate's shortest side (but

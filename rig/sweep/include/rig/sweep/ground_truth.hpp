@@ -24,8 +24,10 @@ struct GroundTruth {
   // Between the target's normal and the line of sight from the target origin
   // to the camera, degrees (0 = seen head-on).
   double viewing_angle_deg = 0;
-  // Markers whose four corners project inside the image (and in front of the
-  // camera), with their mean projected side, px.
+  // Markers in view (in front of the camera, the whole distorted outline at
+  // least image_border_margin_px + min_edge_window_px of vision's default
+  // DetectorParameters, 3 px, inside the image: the white beyond an outer edge
+  // that locating it needs), with their mean projected side, px.
   std::vector<db::store::VisibleMarker> visible_markers;
   // Cramér-Rao bound on the distance's standard deviation for 1 px of
   // isotropic corner noise, for the pose marker's scope (its id) when it is in

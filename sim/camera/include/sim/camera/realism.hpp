@@ -29,8 +29,13 @@
 //   target_origin_sigma_mm = 0.5       # each axis of the target origin
 //   [target]
 //   print_scale_error = 0.002          # the printed sheet is (1 + s) times its layout
+//   bow_sag_mm = 0.0                   # SceneOptions::bow_sag_m, in millimetres
+//   bow_shape = "dome"                 # "dome" | "cylinder_x" | "cylinder_y"
+//   paper_gloss = 1.0, ink_gloss = 1.0 # SceneOptions::paper_gloss, ink_gloss
 //   [light]   paper_reflectance, ink_reflectance, background_reflectance,
-//             lighting_gradient_per_m, lighting_direction_deg
+//             lighting_gradient_per_m, lighting_direction_deg, glare_peak,
+//             glare_lobe_deg, glare_light_tilt_deg, glare_light_azimuth_deg,
+//             flicker_modulation, flicker_frequency_hz, flicker_phase_deg
 //   [optics]  blur_sigma_px, vignetting, f_number, focus_distance_m,
 //             pixel_pitch_um (SceneOptions::pixel_pitch_m in micrometres)
 //   [sensor]  exposure, full_well_electrons, read_noise_electrons, adc_bits, noise,
@@ -40,12 +45,16 @@
 //             every bit; bayer, filter_response: RealismProfile below)
 //   [bench.x], [bench.y]  backlash_mm, repeatability_mm, encoder_scale_ppm,
 //             thermal_drift_um_per_min, vibration_amplitude_mm,
-//             vibration_frequency_hz, vibration_decay_s
+//             vibration_frequency_hz, vibration_decay_s,
+//             pitch_arcsec_per_100mm, pitch_arcsec_per_100mm2,
+//             yaw_arcsec_per_100mm, yaw_arcsec_per_100mm2 (AxisAngularError)
+//   [bench]   abbe_offset_mm = [x, y, z] (CarriageAttitude)
 // ([light], [optics], [sensor]: the sim::scene::SceneOptions fields of the same
 // names, with their units and ranges; [bench.*]: the sim::bench::AxisConfig
 // fields, which replace the bench file's [sim.x] / [sim.y] values when given.)
 #pragma once
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -89,6 +98,47 @@ struct AxisRealism {
       vibration_amplitude_mm, vibration_frequency_hz, vibration_decay_s;
 };
 
+// The angular error motion of one axis's carriage (ISO 230-1 EAY / EAZ for X:
+// pitch and yaw) as a smooth function of that axis's position s (mm):
+//   angle(s) = a (s / 100 mm) + b (s / 100 mm)^2   arcseconds,
+// a = *_arcsec_per_100mm, b = *_arcsec_per_100mm2; 0 at s = 0 (the angle at
+// home is part of the mount's misalignment). A guide's straightness gives a
+// few arcseconds per 100 mm on a precision stage, tens on a robot or a
+// light gantry.
+struct AxisAngularError {
+  double pitch_arcsec_per_100mm = 0, pitch_arcsec_per_100mm2 = 0;
+  double yaw_arcsec_per_100mm = 0, yaw_arcsec_per_100mm2 = 0;
+  bool zero() const {
+    return pitch_arcsec_per_100mm == 0 && pitch_arcsec_per_100mm2 == 0 &&
+           yaw_arcsec_per_100mm == 0 && yaw_arcsec_per_100mm2 == 0;
+  }
+  double pitch_rad(double s_mm) const;
+  double yaw_rad(double s_mm) const;
+};
+
+// How the carriage turns as it travels, and where the camera sits relative
+// to the point the encoders measure: the source of Abbe error. The bench's
+// encoders read the position of the guide's reference point (the pivot);
+// the carriage turns about it by the rotation vector, in bench axes,
+//   w(x, y) = (pitch_y(y), pitch_x(x), yaw_x(x) + yaw_y(y))   radians
+// (X's pitch about bench y, Y's about bench x, both yaws about z; right-handed,
+// small angles), so the camera's optical centre, abbe_offset_mm from the
+// pivot, moves by w x offset (Abbe error = lever arm x angle: a pitch of
+// the X carriage with the camera h above the guide moves it h * angle along
+// x, towards or away from the target) and the camera turns by w. The encoder
+// and so the bench's read-back never see it.
+struct CarriageAttitude {
+  AxisAngularError x, y;
+  Eigen::Vector3d abbe_offset_mm = Eigen::Vector3d::Zero();  // optical centre - pivot, bench axes
+  bool zero() const { return x.zero() && y.zero(); }
+  // w(x, y) above, radians, bench axes.
+  Eigen::Vector3d rotation_vector_rad(double x_mm, double y_mm) const;
+  // The true T_cam_target with the carriage at (x_mm, y_mm): `geometry`'s,
+  // with the carriage turned by w about the pivot. Equals
+  // geometry.T_cam_target(x_mm, y_mm) when zero().
+  vision::Pose T_cam_target(const vision::RigGeometry& geometry, double x_mm, double y_mm) const;
+};
+
 struct RealismProfile {
   std::string name = "ideal";
   TruthSpread truth;
@@ -103,6 +153,7 @@ struct RealismProfile {
   // (sim::camera::CameraServerOptions). Mono (false) by default.
   bool bayer_rg = false;
   std::array<double, 3> filter_response{1.0, 1.0, 1.0};
+  CarriageAttitude attitude;  // pitch and yaw of the carriages, Abbe offset
 };
 
 // Replaces the bench's [sim.x] / [sim.y] imperfections by the profile's.

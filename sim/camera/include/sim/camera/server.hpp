@@ -7,7 +7,9 @@
 // *actual* carriage position (x_mm, y_mm) at its start, waits the exposure
 // time as a sensor integrates, reads it again at its end, turns both into
 // T_cam_target through the rig geometry and renders the target (with motion
-// blur, render_moving, if the carriage moved during the exposure). Any GigE
+// blur, render_moving, if the carriage moved during the exposure). The
+// exposure's start, in seconds since the camera started, is the frame's time
+// on the scene's clock (lamp flicker: scene::SensorExposure::start_time_s). Any GigE
 // Vision client (vision::GigeSource, arv-tool-0.8, arv-viewer) sees a camera
 // "rig-rig-sim-<serial>" (vendor "rig", model "rig-sim", device version
 // "realism <profile>") at the interface address.
@@ -58,6 +60,11 @@ namespace sim::camera {
 // camera thread: must be thread-safe and quick.
 using BenchPositionFn = std::function<std::pair<double, double>()>;
 
+// The true pose of the target in the camera frame with the carriage at
+// (x_mm, y_mm), when it is more than the rig geometry's (the carriage's
+// pitch and yaw: CarriageAttitude). Called from Aravis's camera thread.
+using CameraPoseFn = std::function<vision::Pose(double x_mm, double y_mm)>;
+
 struct CameraServerOptions {
   // IPv4 address (or interface name) the camera binds; loopback by default.
   std::string interface_address = "127.0.0.1";
@@ -105,6 +112,10 @@ class CameraServer {
   CameraServer(const CameraServer&) = delete;
   CameraServer& operator=(const CameraServer&) = delete;
 
+  // Maps carriage positions to poses with `pose` instead of the geometry
+  // alone (the carriage's attitude). Call before start().
+  void set_pose_model(CameraPoseFn pose) { pose_ = std::move(pose); }
+
   // Binds the address and starts answering. Throws std::runtime_error naming
   // the address when it cannot bind (another camera there, no such interface).
   void start();
@@ -135,6 +146,7 @@ class CameraServer {
   std::shared_ptr<const scene::SceneRenderer> renderer_;
   vision::RigGeometry geometry_;
   BenchPositionFn position_;
+  CameraPoseFn pose_;  // empty: geometry_.T_cam_target
   CameraServerOptions options_;
   std::unique_ptr<Impl> impl_;
 };

@@ -4,7 +4,8 @@
 // Pipeline (once per camera: the undistorted ray of every pixel and its
 // Jacobian, by inverting the Brown-Conrady model of vision::Camera; per frame):
 //   1. geometry: each pixel's ray meets the sheet plane z = 0 (a homography of
-//      the undistorted normalized point), giving the pixel's footprint on the
+//      the undistorted normalized point), or the bowed sheet a few steps from
+//      it (SceneOptions::bow_sag_m), giving the pixel's footprint on the
 //      sheet (its centre and the 2x2 Jacobian d(target)/d(pixel));
 //   2. area-correct lookup: the reflectance averaged over the footprint, exactly
 //      integrated on the artwork (per marker a summed-area table of its cell
@@ -13,11 +14,12 @@
 //      integrated over a box of the same second moments as its footprint, so
 //      there is no aliasing near (0.1 m, cells of ~60 px) nor far (1 m, cells
 //      of ~6 px);
-//   3. lighting gradient across the sheet, background (optionally clutter)
-//      where the sheet is not, occluders in front;
+//   3. lighting gradient across the sheet, the glare lobe of a lamp mirrored
+//      in it (weighted by the paper's and the toner's gloss), background
+//      (optionally clutter) where the sheet is not, occluders in front;
 //   4. optical blur (Gaussian PSF), vignetting;
-//   5. sensor: electrons = signal_scale * exposure * full_well * irradiance
-//      * (1 + PRNU), plus the dark signal (dark current x exposure time +
+//   5. sensor: electrons = signal_scale * flicker * exposure * full_well
+//      * irradiance * (1 + PRNU), plus the dark signal (dark current x exposure time +
 //      DSNU); shot noise (Poisson, as a Gaussian of variance = electrons) +
 //      read noise; the well clips at full_well; gain to 8-bit DN, rounding
 //      and clipping.
@@ -26,9 +28,9 @@
 // zone's outer part and carries no geometry).
 //
 // Ground truth: vision::Camera::project (plus SceneOptions::thin_prism) of the target's corners (A,
-// B, C, D of vision::Target::corners_m), i.e. distorted pixels in OpenCV's convention (the centre
-// of the top-left pixel is (0, 0)). The renderer places edges with the same model, so a perfect
-// detector finds these corners.
+// B, C, D of vision::Target::corners_m, raised by the sheet's bow, SceneOptions::bow_sag_m), i.e.
+// distorted pixels in OpenCV's convention (the centre of the top-left pixel is (0, 0)). The
+// renderer places edges with the same model, so a perfect detector finds these corners.
 //
 // Thread safety: render() and render_moving() are const and may run
 // concurrently on one SceneRenderer. The optical blur is cv::GaussianBlur,
@@ -149,6 +151,64 @@ struct SceneOptions {
   // frame (unlike the render seed, which draws the temporal noise).
   uint64_t fixed_pattern_seed = 1;
 
+  // --- specular glare (off by default: glare_peak 0) ---
+  // A lamp far from the sheet, seen mirrored in it: the sheet reflects it in a
+  // lobe about the mirror direction (Phong-like, the roughness of paper and
+  // toner). With the lamp at glare_light_tilt_deg from the sheet's normal,
+  // towards glare_light_azimuth_deg on the sheet (0 = target +x, 90 = +y),
+  // its mirror direction R is fixed in the target frame; the spot lies where
+  // the direction from the sheet to the camera is R, so it moves over the
+  // sheet with the camera's position and over the image with its rotation (a
+  // pixel whose ray d sees the sheet shows the lobe at the angle between d and
+  // -R, seen from any point). Added radiance, in reflectance units (1 = a
+  // perfect white diffuser at full illumination):
+  //   glare_peak * gloss * exp(-(1 - cos angle) / sigma^2),  sigma = glare_lobe_deg,
+  // a Gaussian of sigma glare_lobe_deg in the angle for small angles, so the
+  // spot's image radius is ~fx * sigma pixels at any distance. gloss is
+  // paper_gloss on paper, ink_gloss on toner. Where paper + glare exceeds
+  // 1 / exposure the well saturates. The bow of the sheet does not tilt the
+  // lobe (its slope, < 1 degree, is far below a lobe of several degrees).
+  double glare_peak = 0;
+  double glare_lobe_deg = 8;
+  double glare_light_tilt_deg = 20;
+  double glare_light_azimuth_deg = 0;
+  // Specular reflectance of the paper and of the toner relative to the
+  // reference of glare_peak (1 = plain office paper). Fused laser toner is a
+  // polymer film, glossier than paper: ~2-4. Only with glare_peak > 0.
+  double paper_gloss = 1;
+  double ink_gloss = 1;
+
+  // --- lamp flicker (off by default: flicker_modulation 0) ---
+  // The lamps' intensity I(t) = I0 (1 + m sin(2 pi f t + phase)), f twice the
+  // mains frequency (100 Hz on 50 Hz mains, 120 Hz on 60 Hz). An exposure of T
+  // seconds from t0 collects the mean over [t0, t0 + T]:
+  //   I0 (1 + m sinc(pi f T) sin(2 pi f (t0 + T / 2) + phase)),  sinc x = sin x / x,
+  // so frames taken at different times differ by a relative amplitude of
+  // m |sinc(pi f T)|: m for T << 1 / f, 0 when T covers whole periods, and
+  // falling as 1 / (pi f T) between. Applied to the whole scene (sheet,
+  // glare and background) in the sensor stage, from SensorExposure's
+  // start_time_s and exposure_time_s (flicker_gain below).
+  double flicker_modulation = 0;  // m, 0 .. 1 (percent flicker / 100, IEEE 1789)
+  double flicker_frequency_hz = 100;
+  double flicker_phase_deg = 0;
+
+  // --- bow of the sheet (off by default: bow_sag_m 0) ---
+  // The sheet is not flat: it bulges towards the camera by
+  //   h(X, Y) = bow_sag_m * (1 - wx u^2 - wy v^2),
+  // u, v = the position across the sheet scaled to -1 .. 1 (sheet centre 0,
+  // edges +-1), i.e. a paraboloid whose rim lies on the plane z = 0 of the
+  // target frame: kDome wx = wy = 1/2 (the corners on the plane, the centre
+  // raised by the sag), kCylinderX wx = 1, wy = 0 (curled along the sheet's x:
+  // the left and right edges on the plane), kCylinderY wx = 0, wy = 1. A
+  // point of the artwork at (X, Y) is rendered, and its truth projected, at
+  // (X, Y, -h(X, Y)) in the target frame (z points into the sheet), so a
+  // marker at sag h is h closer to the camera. The artwork is placed by its
+  // projection on the plane: the arc length's excess (~(2 h / W)^2, < 1e-4 for
+  // a 1 mm sag over A4) is not modelled.
+  enum class BowShape { kDome, kCylinderX, kCylinderY };
+  double bow_sag_m = 0;
+  BowShape bow_shape = BowShape::kDome;
+
   // --- optional disturbances (off by default) ---
   // Random shapes (rectangles, quadrilaterals, ellipses, lines, checker
   // patches, grey levels 0.05 .. 0.95) on the background behind the sheet,
@@ -181,7 +241,22 @@ struct SensorExposure {
   // Analogue gain, linear (DN per DN at unity gain): scales signal and noise
   // alike, after the well; the ADC clips at its top level.
   double gain = 1;
+  // When the exposure starts, seconds on the scene's clock (the lamps' phase
+  // is SceneOptions::flicker_phase_deg at 0): sets the flicker of the frame.
+  double start_time_s = 0;
 };
+
+// The relative illumination of an exposure of exposure_time_s seconds that
+// starts at start_time_s, under the lamps' flicker of `options` (see
+// SceneOptions::flicker_modulation): 1 + m sinc(pi f T) sin(2 pi f (t0 + T/2) + phase);
+// exactly 1 when flicker_modulation is 0. exposure_time_s 0 gives the
+// instantaneous intensity.
+double flicker_gain(const SceneOptions& options, double start_time_s, double exposure_time_s);
+
+// The sag of the sheet of `target` at (X, Y) of the target frame, metres
+// towards the camera (see SceneOptions::bow_sag_m); 0 when bow_sag_m is 0.
+double sheet_sag_m(const SceneOptions& options, const vision::Target& target, double x_m,
+                   double y_m);
 
 struct MarkerTruth {
   int id = 0;
