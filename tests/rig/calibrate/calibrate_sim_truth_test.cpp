@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <optional>
 
 #include "db/stats/descriptive.hpp"
 #include "opencv_reference.hpp"
@@ -34,10 +35,11 @@ struct SeedErrors {
   std::map<std::string, double> error, stated_sd;
 };
 
-SeedErrors calibrate_seed(std::uint64_t seed) {
+SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) {
   rig_test::SimTruthSweepSpec spec;
   spec.source_dir = RIG_SOURCE_DIR;
   spec.truth_seed = seed;
+  spec.bow_sag_mm = bow_sag_mm;
   spec.position_stride = 2;
   const auto start = std::chrono::steady_clock::now();
   const rig_test::SimTruthSweep sweep = rig_test::render_calibration_sweep(spec);
@@ -88,13 +90,15 @@ SeedErrors calibrate_seed(std::uint64_t seed) {
 //    Bounds: the worst measured (0.0086, 0.0123 deg) plus ~20 %.
 //  - the print scale: measured within 3.5e-6 of the truth (the bias of
 //    the detector's corners at 0.7 px of blur); bound 1e-5.
+// The sheet is rendered flat here: its bow (next test) is outside every
+// file's model, the calibration's and the truth's alike.
 TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
   const std::map<std::string, double> bound = {
       {"fx", 2e-4},      {"fy", 2e-4},    {"cx", 0.2},         {"cy", 0.2},    {"roll", 0.005},
       {"pitch", 0.0105}, {"yaw", 0.0150}, {"distance", 20e-6}, {"scale", 1e-5}};
   std::map<std::string, std::vector<double>> errors, stated;
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
-    const SeedErrors e = calibrate_seed(seed);
+    const SeedErrors e = calibrate_seed(seed, 0.0);
     for (const auto& [name, value] : e.error) {
       errors[name].push_back(value);
       EXPECT_LT(std::abs(value), bound.at(name)) << name << " seed " << seed;
@@ -134,6 +138,28 @@ TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
     if (range == ratio_range.end()) continue;
     EXPECT_GT(ratio, range->second.first) << name;
     EXPECT_LT(ratio, range->second.second) << name;
+  }
+}
+
+// The lab sheet bows towards the camera by bow_sag_mm at its centre (a dome
+// held at its edges). The truth's target pose is the flat plane of the
+// edges; the calibration fits a plane to the markers, which lie between that
+// plane and the sag, so its camera-to-target distance at bench zero is
+// shorter by at most the sag (measured on seeds 1-10 with 0.1 mm: -98 to
+// -108 um; the markers cluster where the dome is highest). That is where the
+// solvers see the sheet too. Bound: the flat sheet's 20 um on either side of
+// [-sag, 0]. The intrinsics do not depend on the bow (measured: within the
+// flat sheet's bounds); the print scale shifts by ~1e-5, left unchecked.
+TEST(CalibrateSimTruth, ABowedSheetMovesTheTargetPlaneTowardsTheCameraByAtMostItsSag) {
+  const double sag_mm = 0.1;  // config/realism/lab.toml [target] bow_sag_mm
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    const SeedErrors e = calibrate_seed(seed, sag_mm);
+    EXPECT_LT(e.error.at("distance"), 20e-6) << "seed " << seed;
+    EXPECT_GT(e.error.at("distance"), -sag_mm / 1000 - 20e-6) << "seed " << seed;
+    for (const char* name : {"fx", "fy"})
+      EXPECT_LT(std::abs(e.error.at(name)), 2e-4) << name << " seed " << seed;
+    for (const char* name : {"cx", "cy"})
+      EXPECT_LT(std::abs(e.error.at(name)), 0.2) << name << " seed " << seed;
   }
 }
 

@@ -21,6 +21,7 @@ SimTruthSweep render_calibration_sweep(const SimTruthSweepSpec& spec) {
   sim::camera::RealismProfile profile = sim::camera::load_realism_profile(
       spec.source_dir + "/config/realism/" + spec.realism + ".toml");
   profile.truth.seed = spec.truth_seed;
+  if (spec.bow_sag_mm) profile.scene.bow_sag_m = *spec.bow_sag_mm / 1000;
   const vision::Target layout = vision::Target::load(calibration_target_path(spec.source_dir));
   rig::calibrate::CalibrationProblem problem;
   problem.source = "simulated calibration sweep, truth seed " + std::to_string(spec.truth_seed);

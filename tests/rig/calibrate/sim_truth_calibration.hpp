@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -31,6 +32,8 @@ struct SimTruthSweepSpec {
   std::uint64_t truth_seed = 1;
   int frames_per_position = 1;  // each with its own sensor noise
   int position_stride = 1;      // every n-th position of the plan
+  // Replaces the profile's [target] bow_sag_mm when set (0: a flat sheet).
+  std::optional<double> bow_sag_mm;
 };
 
 // The nominal files of the simulated rig: config/sim.toml's camera (the
