@@ -140,6 +140,16 @@ class Store {
   // exist, is not running, or plan_index is outside [0, plan_size).
   void append_position(std::int64_t run_id, const PositionRecord& position);
 
+  // A failed position measured again (`rig sweep --resume RUN --retry-failed`):
+  // in one transaction, the run's position at position.plan_index, which must
+  // be stored as failed, is deleted with everything it held and `position` is
+  // written in its place. Either the new position is stored or the failed
+  // one is still there. The failure itself stays recorded in the run's events
+  // (the controller records a "camera"/"settle" fault and a "retake" event).
+  // Throws StoreError naming the run and plan index if the run has no failed
+  // position there (none, or one stored ok), and as append_position.
+  void retake_failed_position(std::int64_t run_id, const PositionRecord& position);
+
   // Records the camera that takes the run's frames (table run_camera, one
   // per run): a resumed run records the camera it was resumed with, replacing
   // the earlier one. Throws StoreError for an unknown run.
