@@ -145,13 +145,13 @@ motion::DriveProfile profile_for(std::uint8_t conventions) {
   static const motion::DriveProfile base =
       motion::load_drive_profile(std::string(RIG_SOURCE_DIR) + "/config/benches/sim.toml");
   motion::DriveProfile p = base;
-  p.timing.response_timeout_ms = 20;
+  p.timing.response_timeout_ms = 5;
   p.timing.reconnect_timeout_ms = 0;
   p.timing.poll_interval_ms = 1;
   p.timing.settle_time_ms = 1;
-  p.timing.settle_timeout_ms = 20;
-  p.timing.home_timeout_ms = 20;
-  p.protocol.accept_timeout_ms = 10;
+  p.timing.settle_timeout_ms = 5;
+  p.timing.home_timeout_ms = 5;
+  p.protocol.accept_timeout_ms = 3;
   p.protocol.pulse_ms = 1;
   if (conventions & 1) p.position_bits = 16;
   if (conventions & 2) p.word_order = motion::WordOrder::kLowFirst;
@@ -194,7 +194,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     attempt([&] { (void)bench.position(); });
     attempt([&] { bench.set_speed(40); });
     attempt([&] { bench.move_to(120.5, 80.25); });
-    attempt([&] { (void)bench.wait_settled(20ms); });
+    attempt([&] { (void)bench.wait_settled(5ms); });
     attempt([&] { bench.home(); });
     attempt([&] { bench.reset_alarm(); });
     attempt([&] { bench.stop(); });

@@ -206,6 +206,13 @@ class Parser {
         tag = "opencv-matrix";
       }
       Node b = block(indent, depth + 1);
+      const std::size_t next = next_content();
+      if (b.entries.empty() && next != kNone) {
+        const std::string_view body = strip_comment(lines_[next]);
+        if (body.front() == '-')
+          fail(next, "a block sequence item '" + excerpt(body) + "'",
+               "KEY: VALUE (a sequence is written [a, b, ...])");
+      }
       if (b.entries.empty())
         fail(k, tag.empty() ? "a key with no value" : "!!opencv-matrix with no block below",
              tag.empty() ? scalar : "rows, cols, dt and data on indented lines");
