@@ -138,7 +138,8 @@ int run_on_bench(const SweepArgs& args, const sweep::SweepConfig& config,
   db::store::Store store = sweep::open_run_database(database, config);
 
   const std::optional<sweep::StartedRun> run =
-      args.resume_run > 0 ? sweep::resume_run(config, args.resume_run, bench, store, link.control)
+      args.resume_run > 0 ? sweep::resume_run(config, args.resume_run, bench, store, link.control,
+                                              args.retry_failed)
                           : sweep::start_new_run(config, bench, store, link.control);
   if (!run) {
     std::cerr << "rig sweep: " << link.control.abort_reason()
@@ -192,8 +193,9 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--retry-failed", args->retry_failed,
                 "With --resume: also measure again, in plan order, every position the run stored "
-                "as failed (e.g. while the camera was lost); each new measurement replaces the "
-                "failed one, whose reason stays in the run's events (kind \"retake\")");
+                "as failed (e.g. while the camera was lost), also of a run that completed with "
+                "failed positions; each new measurement replaces the failed one, whose reason "
+                "stays in the run's events (kind \"retake\")");
   cmd->add_option("--replay", args->replay_run,
                   "Measure the frames run RUN saved ([capture] save_frames) again, into a new "
                   "run of the same database: the run's plan and recorded bench read-backs, this "

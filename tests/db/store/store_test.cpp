@@ -164,6 +164,24 @@ TEST_F(StoreTest, RefusesASecondPositionWithTheSamePlanIndexAndKeepsTheFirst) {
 // rig sweep --resume --retry-failed: a failed position is replaced, with
 // everything it held, by its new measurement; a position stored ok, or one
 // not stored, is refused and left as it was.
+// --resume --retry-failed on a completed run: reopened only when it has a
+// failed position to measure again.
+TEST_F(StoreTest, ResumesACompletedRunForRetakesOnlyWhenItHasAFailedPosition) {
+  const std::int64_t clean = store_.start_run(make_run_description(1));
+  store_.append_position(clean, make_position(0));
+  store_.finish_run(clean, db::store::RunStatus::kCompleted, "");
+  EXPECT_THROW(store_.resume_run(clean, /*completed_with_failed=*/true), db::store::StoreError);
+  const std::int64_t with_failed = store_.start_run(make_run_description(1));
+  db::store::PositionRecord failed = make_position(0);
+  failed.status = db::store::PositionStatus::kFailed;
+  failed.failure_reason = "camera: gone";
+  store_.append_position(with_failed, failed);
+  store_.finish_run(with_failed, db::store::RunStatus::kCompleted, "");
+  EXPECT_THROW(store_.resume_run(with_failed), db::store::StoreError);
+  store_.resume_run(with_failed, /*completed_with_failed=*/true);
+  EXPECT_EQ(store_.run(with_failed).status, db::store::RunStatus::kRunning);
+}
+
 TEST_F(StoreTest, RetakesAFailedPositionInPlaceAndRefusesToReplaceAnOkOne) {
   const std::int64_t run = store_.start_run(make_run_description(10));
   db::store::PositionRecord failed = make_position(4);

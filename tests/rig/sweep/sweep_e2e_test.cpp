@@ -471,6 +471,50 @@ TEST(SweepEndToEnd, AResumeWithRetryFailedMeasuresAgainExactlyThePositionsStored
   expect_positions_whole(db, 2);
 }
 
+// A run that completed with failed positions (fewer in a row than
+// max_consecutive_failed) is not resumed, except to measure those again.
+TEST(SweepEndToEnd, ACompletedRunWithFailedPositionsIsResumedOnlyToRetryThem) {
+  SimRig rig;
+  SweepFileOptions o;
+  o.max_consecutive_failed = 6;  // more than the 6-position plan can fail
+  o.extra_capture = "grab_timeout_ms = 500\nretries = 1\n";
+  o.extra_faults = "camera_reopen_timeout_ms = 0\n";
+  const std::string sweep = rig.write_sweep(o);
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  rig.camera().stop();
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  std::vector<std::string> failed_before;
+  {
+    SqlProbe db(rig.database());
+    ASSERT_EQ(db.value("SELECT status FROM runs"), "completed");
+    failed_before = db.column(
+        "SELECT plan_index FROM positions WHERE status = 'failed' ORDER BY "
+        "plan_index");
+    ASSERT_GE(failed_before.size(), 3u);  // 3, 4 and 5 at least
+  }
+  rig.camera().start();
+  const rig_test::RigRun plain = rig_test::run_rig("sweep " + sweep + " --resume 1");
+  EXPECT_EQ(plain.exit_code, 2);
+  EXPECT_NE(plain.err.find("run 1 is completed"), std::string::npos) << plain.err;
+  auto retry = start_sweep({sweep, "--resume", "1", "--retry-failed"});
+  EXPECT_EQ(wait_exit(*retry, 120s), 0);
+  {
+    SqlProbe db(rig.database());
+    EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+    EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+    EXPECT_EQ(db.column("SELECT plan_index FROM run_events WHERE kind = 'retake' ORDER BY id"),
+              failed_before);
+    expect_positions_whole(db, 2);
+  }
+  const rig_test::RigRun nothing =
+      rig_test::run_rig("sweep " + sweep + " --resume 1 --retry-failed");
+  EXPECT_EQ(nothing.exit_code, 2);
+  EXPECT_NE(nothing.err.find("is completed and has no position stored as failed"),
+            std::string::npos)
+      << nothing.err;
+}
+
 TEST(SweepEndToEnd, ACalibrationForAnotherImageSizeStopsBeforeTheBenchMoves) {
   SimRig rig;
   // The paper camera's calibration, for a 640x480 sensor.

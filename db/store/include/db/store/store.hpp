@@ -123,9 +123,11 @@ class Store {
   void finish_run(std::int64_t run_id, RunStatus status, const std::string& reason);
 
   // Puts an aborted or failed run, or one left running by a crash, back to
-  // running for `rig sweep --resume`; clears ended_at and the reason. Throws
-  // StoreError for an unknown or completed run.
-  void resume_run(std::int64_t run_id);
+  // running for `rig sweep --resume`; clears ended_at and the reason. With
+  // completed_with_failed, also a completed run that has a position stored as
+  // failed (`--resume RUN --retry-failed`). Throws StoreError for an unknown
+  // run or any other completed one.
+  void resume_run(std::int64_t run_id, bool completed_with_failed = false);
 
   // Every run, oldest first, with its stored files: runs are few and small
   // next to their positions.
