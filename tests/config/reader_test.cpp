@@ -225,6 +225,22 @@ TEST(Choice, AcceptsOneOfTheOptions) {
             "dir/f.toml: n = 1: expected \"a\" or \"b\"");
 }
 
+TEST(Strings, AcceptsAnArrayOfStringsOfTheGivenSizes) {
+  config::Table t =
+      parse("argv = [\"python3\", \"x y.py\"]\nnone = []\nmixed = [\"a\", 1]\ns = \"a\"").root();
+  EXPECT_EQ(t.strings("argv", 1, 4, "a command"), (std::vector<std::string>{"python3", "x y.py"}));
+  EXPECT_EQ(error_of([&] { t.strings("none", 1, 4, "a command"); }),
+            "dir/f.toml: none = []: expected a command");
+  EXPECT_EQ(error_of([&] { t.strings("argv", 1, 1, "one program"); }),
+            "dir/f.toml: argv = [\"python3\", \"x y.py\"]: expected one program");
+  EXPECT_EQ(error_of([&] { t.strings("mixed", 1, 4, "a command"); }),
+            "dir/f.toml: mixed = [\"a\", 1]: expected a command");
+  EXPECT_EQ(error_of([&] { t.strings("s", 1, 4, "a command"); }),
+            "dir/f.toml: s = \"a\": expected a command");
+  EXPECT_EQ(error_of([&] { t.strings("absent", 1, 4, "a command"); }),
+            "dir/f.toml: absent: missing; expected a command");
+}
+
 TEST(Numbers, AcceptsAnArrayOfFiniteNumbersOfTheGivenSizes) {
   config::Table t =
       parse("v = [1, 2.5, -3]\nshort = [1]\nmixed = [1, \"2\", 3]\ninf = [1, inf, 3]\nn = 3")

@@ -6,8 +6,11 @@
 
 #include <algorithm>
 #include <atomic>
-#include <cstdio>
+#include <chrono>
+#include <cmath>
 #include <utility>
+
+#include "vision/pixel_format.hpp"
 
 namespace vision {
 namespace {
@@ -110,6 +113,27 @@ void set_region(ArvCamera* camera, const CaptureOptions& o, const std::string& w
             "+" + std::to_string(o.offset_y.value_or(y)));
 }
 
+// The exposure time in µs, by the feature the camera has: SFNC's
+// ExposureTime (GenICam SFNC 2.x) or the older ExposureTimeAbs (SFNC 1.x,
+// still the name on many GigE Vision 1.x cameras). Both are floats in µs.
+void set_exposure(ArvCamera* camera, double exposure_us, const std::string& who) {
+  GError* error = nullptr;
+  ArvDevice* device = arv_camera_get_device(camera);
+  const char* feature = nullptr;
+  for (const char* name : {"ExposureTime", "ExposureTimeAbs"}) {
+    if (arv_device_is_feature_available(device, name, &error)) {
+      feature = name;
+      break;
+    }
+    g_clear_error(&error);
+  }
+  if (feature == nullptr)
+    throw CaptureError(who, "exposure time " + std::to_string(exposure_us) +
+                                " us: the camera has neither ExposureTime nor ExposureTimeAbs");
+  arv_device_set_float_feature_value(device, feature, exposure_us, &error);
+  check(error, who, std::string(feature) + "=" + std::to_string(exposure_us) + " us");
+}
+
 // Applies the options' features: continuous acquisition, pixel format,
 // region, exposure, gain, and software trigger or free run at a frame rate.
 void configure(ArvCamera* camera, const CaptureOptions& o, const std::string& who) {
@@ -119,13 +143,19 @@ void configure(ArvCamera* camera, const CaptureOptions& o, const std::string& wh
   arv_camera_set_pixel_format_from_string(camera, o.pixel_format.c_str(), &error);
   check(error, who, "PixelFormat=" + o.pixel_format);
   if (o.width || o.height || o.offset_x || o.offset_y) set_region(camera, o, who);
-  if (o.exposure_us) {
-    arv_camera_set_exposure_time(camera, *o.exposure_us, &error);
-    check(error, who, "exposure time " + std::to_string(*o.exposure_us) + " us");
-  }
+  if (o.exposure_us) set_exposure(camera, *o.exposure_us, who);
   if (o.gain) {
     arv_camera_set_gain(camera, *o.gain, &error);
     check(error, who, "gain " + std::to_string(*o.gain));
+  }
+  if (o.packet_size_bytes) {
+    arv_camera_gv_set_packet_size(camera, *o.packet_size_bytes, &error);
+    check(error, who, "GevSCPSPacketSize=" + std::to_string(*o.packet_size_bytes) + " bytes");
+  }
+  if (o.inter_packet_delay_ns) {
+    arv_camera_gv_set_packet_delay(camera, static_cast<gint64>(*o.inter_packet_delay_ns), &error);
+    check(error, who,
+          "inter-packet delay (GevSCPD) " + std::to_string(*o.inter_packet_delay_ns) + " ns");
   }
   if (o.software_trigger) {
     arv_camera_set_trigger(camera, "Software", &error);
@@ -138,6 +168,103 @@ void configure(ArvCamera* camera, const CaptureOptions& o, const std::string& wh
       check(error, who, "frame rate " + std::to_string(*o.frame_rate_hz) + " Hz");
     }
   }
+}
+
+// Host CLOCK_REALTIME, ns since the epoch.
+int64_t host_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Latches the camera's timestamp counter (GevTimestampControlLatch, then
+// GevTimestampValue) between two reads of the host clock, three times (the
+// narrowest bracket wins: vision/camera_clock.hpp). A camera without the
+// latch, or one that refuses it, leaves the clock to the frames' arrivals.
+void latch_clock(ArvCamera* camera, CameraClock* clock) {
+  ArvDevice* device = arv_camera_get_device(camera);
+  GError* error = nullptr;
+  const bool has_latch =
+      arv_device_is_feature_available(device, "GevTimestampControlLatch", &error) &&
+      arv_device_is_feature_available(device, "GevTimestampValue", &error);
+  const guint64 hz = has_latch && error == nullptr
+                         ? arv_gv_device_get_timestamp_tick_frequency(ARV_GV_DEVICE(device), &error)
+                         : 0;
+  if (error != nullptr || hz == 0) {
+    g_clear_error(&error);
+    return;
+  }
+  const double ns_per_tick = 1e9 / static_cast<double>(hz);
+  for (int k = 0; k < 3; ++k) {
+    const int64_t before = host_now_ns();
+    arv_device_execute_command(device, "GevTimestampControlLatch", &error);
+    const gint64 ticks =
+        error == nullptr ? arv_device_get_integer_feature_value(device, "GevTimestampValue", &error)
+                         : 0;
+    const int64_t after = host_now_ns();
+    if (error != nullptr) {
+      g_clear_error(&error);
+      return;
+    }
+    clock->add_latch(before, static_cast<int64_t>(static_cast<double>(ticks) * ns_per_tick), after,
+                     static_cast<int64_t>(std::ceil(ns_per_tick)));
+  }
+}
+
+// A buffer's image, or why there is none: a status other than success, a
+// format the capture path does not read, or too few bytes for its format.
+struct Payload {
+  cv::Mat image;
+  ArvPixelFormat format = 0;
+  bool unreadable_format = false;
+  std::string problem;
+};
+
+Payload payload_of(ArvBuffer* buffer) {
+  Payload p;
+  const ArvBufferStatus status = arv_buffer_get_status(buffer);
+  size_t size = 0;
+  const void* data =
+      status == ARV_BUFFER_STATUS_SUCCESS ? arv_buffer_get_image_data(buffer, &size) : nullptr;
+  if (data == nullptr) {
+    p.problem = status_name(status);
+    return p;
+  }
+  p.format = arv_buffer_get_image_pixel_format(buffer);
+  if (!is_readable_pixel_format(p.format)) {
+    p.unreadable_format = true;
+    return p;
+  }
+  try {
+    p.image = gige_payload_to_image(data, size, arv_buffer_get_image_width(buffer),
+                                    arv_buffer_get_image_height(buffer), p.format);
+  } catch (const PixelFormatError& e) {
+    p.problem = e.what();  // a readable format, but not all of its bytes
+  }
+  return p;
+}
+
+std::chrono::system_clock::time_point wall_time(int64_t ns_since_epoch) {
+  return std::chrono::system_clock::time_point(
+      std::chrono::duration_cast<std::chrono::system_clock::duration>(
+          std::chrono::nanoseconds(ns_since_epoch)));
+}
+
+// The Frame of a whole buffer; its timestamps feed the camera clock.
+Frame frame_of(ArvBuffer* buffer, const Payload& payload, CameraClock* clock) {
+  Frame frame;
+  frame.image = payload.image;
+  frame.significant_bits = significant_bits(payload.format);
+  frame.frame_id = arv_buffer_get_frame_id(buffer);
+  frame.camera_timestamp_ns = arv_buffer_get_timestamp(buffer);
+  const auto arrival_ns = static_cast<int64_t>(arv_buffer_get_system_timestamp(buffer));
+  frame.host_time = wall_time(arrival_ns);
+  if (frame.camera_timestamp_ns != 0) {
+    const auto camera_ns = static_cast<int64_t>(frame.camera_timestamp_ns);
+    clock->add_arrival(camera_ns, arrival_ns);
+    frame.exposure_host_time = wall_time(*clock->to_host_ns(camera_ns));
+  }
+  return frame;
 }
 
 }  // namespace
@@ -261,6 +388,8 @@ void GigeSource::open() {
   impl->control_lost_handler = g_signal_connect(arv_camera_get_device(impl->camera), "control-lost",
                                                 G_CALLBACK(on_control_lost), &impl->control_lost);
   configure(impl->camera, options_, who);
+  clock_ = CameraClock();
+  latch_clock(impl->camera, &clock_);
   impl->start_stream(options_, who);
 
   guard.armed = false;
@@ -313,45 +442,27 @@ Frame GigeSource::grab(std::chrono::milliseconds timeout) {
       continue;
     }
     impl_->note_frame_id(arv_buffer_get_frame_id(buffer), counters_);
-    const ArvBufferStatus status = arv_buffer_get_status(buffer);
     const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
-    size_t size = 0;
-    const void* data =
-        status == ARV_BUFFER_STATUS_SUCCESS ? arv_buffer_get_image_data(buffer, &size) : nullptr;
-    const int width = data != nullptr ? arv_buffer_get_image_width(buffer) : 0;
-    const int height = data != nullptr ? arv_buffer_get_image_height(buffer) : 0;
-    const ArvPixelFormat format = data != nullptr ? arv_buffer_get_image_pixel_format(buffer) : 0;
-    const int bits = ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format);
-    const int type = bits == 8 ? CV_8UC1 : bits == 16 ? CV_16UC1 : -1;
-    const bool whole = data != nullptr && width > 0 && height > 0 && type >= 0 &&
-                       size >= static_cast<size_t>(width) * height * (bits / 8);
-    if (data != nullptr && type < 0) {
+    const Payload payload = payload_of(buffer);
+    if (payload.unreadable_format) {
       arv_stream_push_buffer(impl_->stream, buffer);
-      throw CaptureError(
-          who, "pixel format 0x" + [&] {
-            char hex[16];
-            std::snprintf(hex, sizeof hex, "%08x", static_cast<unsigned>(format));
-            return std::string(hex);
-          }() + " is not a mono 8 or 16 bit format; use Mono8");
+      throw CaptureError(who, "the camera sends pixel format " + pixel_format_name(payload.format) +
+                                  ", which the capture path does not read; set "
+                                  "capture.pixel_format to one of " +
+                                  readable_pixel_formats());
     }
-    if (!whole) {
+    if (payload.image.empty()) {
       ++counters_.incomplete;
       arv_stream_push_buffer(impl_->stream, buffer);
       if (!may_retry)
         throw CaptureError(who, "frame " + std::to_string(frame_id) + " incomplete (" +
-                                    (data != nullptr ? "short payload" : status_name(status)) +
-                                    "), after " + std::to_string(attempt) + " retries");
+                                    payload.problem + "), after " + std::to_string(attempt) +
+                                    " retries");
       ++counters_.retries;
       if (options_.software_trigger) trigger();
       continue;
     }
-    Frame frame;
-    frame.image = cv::Mat(height, width, type, const_cast<void*>(data)).clone();
-    frame.frame_id = frame_id;
-    frame.camera_timestamp_ns = arv_buffer_get_timestamp(buffer);
-    frame.host_time = std::chrono::system_clock::time_point(
-        std::chrono::duration_cast<std::chrono::system_clock::duration>(
-            std::chrono::nanoseconds(arv_buffer_get_system_timestamp(buffer))));
+    Frame frame = frame_of(buffer, payload, &clock_);
     frame.origin = who;
     arv_stream_push_buffer(impl_->stream, buffer);
     ++counters_.delivered;

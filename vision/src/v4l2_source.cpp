@@ -14,6 +14,8 @@
 #include <ctime>
 #include <utility>
 
+#include "vision/pixel_format.hpp"
+
 namespace vision {
 namespace {
 
@@ -85,8 +87,9 @@ void V4l2Source::open() {
   format.fmt.pix.field = V4L2_FIELD_NONE;
   if (xioctl(fd_, VIDIOC_S_FMT, &format) != 0) fail("VIDIOC_S_FMT: " + errno_text());
   fourcc_ = format.fmt.pix.pixelformat;
-  if (fourcc_ != V4L2_PIX_FMT_GREY && fourcc_ != V4L2_PIX_FMT_Y16 && fourcc_ != V4L2_PIX_FMT_YUYV)
-    fail("device offers neither GREY, Y16 nor YUYV");
+  if (fourcc_ != V4L2_PIX_FMT_GREY && fourcc_ != V4L2_PIX_FMT_Y16 && fourcc_ != V4L2_PIX_FMT_YUYV &&
+      fourcc_ != V4L2_PIX_FMT_MJPEG)
+    fail("device offers " + fourcc_name(fourcc_) + ", not GREY, Y16, YUYV or MJPG");
   width_ = static_cast<int>(format.fmt.pix.width);
   height_ = static_cast<int>(format.fmt.pix.height);
   bytes_per_line_ = static_cast<int>(format.fmt.pix.bytesperline);
@@ -144,24 +147,19 @@ Frame V4l2Source::grab(std::chrono::milliseconds timeout) {
     }
     const uint64_t stamp_ns = static_cast<uint64_t>(buffer.timestamp.tv_sec) * 1000000000ull +
                               static_cast<uint64_t>(buffer.timestamp.tv_usec) * 1000ull;
-    const size_t row_bytes = static_cast<size_t>(width_) * (fourcc_ == V4L2_PIX_FMT_GREY ? 1 : 2);
-    const size_t stride = bytes_per_line_ > 0 ? static_cast<size_t>(bytes_per_line_) : row_bytes;
-    const bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0 ||
-                         buffer.bytesused < stride * static_cast<size_t>(height_ - 1) + row_bytes;
     // Only a CLOCK_MONOTONIC timestamp compares with trigger()'s clock; a
     // device with another clock cannot tell stale frames and takes the next.
     const bool monotonic =
         (buffer.flags & V4L2_BUF_FLAG_TIMESTAMP_MASK) == V4L2_BUF_FLAG_TIMESTAMP_MONOTONIC;
     const bool stale = monotonic && stamp_ns < not_before_ns_;
+    bool corrupt = (buffer.flags & V4L2_BUF_FLAG_ERROR) != 0;
     Frame frame;
     if (!corrupt && !stale) {
-      const auto* data = static_cast<const uint8_t*>(buffers_[buffer.index].start);
-      if (fourcc_ == V4L2_PIX_FMT_YUYV) {
-        cv::Mat yuyv(height_, width_, CV_8UC2, const_cast<uint8_t*>(data), stride);
-        cv::extractChannel(yuyv, frame.image, 0);
-      } else {
-        const int type = fourcc_ == V4L2_PIX_FMT_GREY ? CV_8UC1 : CV_16UC1;
-        frame.image = cv::Mat(height_, width_, type, const_cast<uint8_t*>(data), stride).clone();
+      try {
+        frame.image = v4l2_buffer_to_image(buffers_[buffer.index].start, buffer.bytesused, width_,
+                                           height_, static_cast<size_t>(bytes_per_line_), fourcc_);
+      } catch (const PixelFormatError&) {
+        corrupt = true;  // short, or a JPEG that does not decode: a damaged frame
       }
     }
     if (xioctl(fd_, VIDIOC_QBUF, &buffer) != 0)
@@ -180,6 +178,7 @@ Frame V4l2Source::grab(std::chrono::milliseconds timeout) {
       continue;
     }
     frame.frame_id = buffer.sequence;
+    frame.significant_bits = fourcc_ == V4L2_PIX_FMT_Y16 ? 16 : 8;
     frame.camera_timestamp_ns = stamp_ns;
     frame.host_time = std::chrono::system_clock::now();
     frame.origin = who;

@@ -173,6 +173,22 @@ std::vector<double> Table::numbers(const std::string& key, std::size_t min_count
   return out;
 }
 
+std::vector<std::string> Table::strings(const std::string& key, std::size_t min_count,
+                                        std::size_t max_count, const std::string& expected) {
+  const detail::Node* n = take(key);
+  const toml::array* array = n ? toml_node(*n).as_array() : nullptr;
+  if (array == nullptr || array->size() < min_count || array->size() > max_count) {
+    fail(key, expected);
+  }
+  std::vector<std::string> out;
+  for (const toml::node& element : *array) {
+    const auto value = element.value<std::string>();
+    if (!element.is_string() || !value) fail(key, expected);
+    out.push_back(*value);
+  }
+  return out;
+}
+
 std::string Table::resolve(const std::string& written) const {
   const fs::path path(written);
   return (path.is_absolute() ? path : parsed_->folder / path).lexically_normal().string();

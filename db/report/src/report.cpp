@@ -38,13 +38,46 @@ RunReference RunReference::parse(const std::string& text) {
   return ref;
 }
 
+namespace {
+
+// The stored truth of every position replaced by the recomputed one; a
+// position the recomputation has no entry for has no known truth.
+void replace_truth(const RecomputedTruth& truth, RunData& data) {
+  for (PositionData& p : data.positions) {
+    store::PositionRecord& r = p.record;
+    const auto it = truth.positions.find(r.plan_index);
+    const PositionTruth none;
+    const PositionTruth& t = it == truth.positions.end() ? none : it->second;
+    r.true_distance_m = t.true_distance_m;
+    r.true_viewing_angle_deg = t.true_viewing_angle_deg;
+    r.distance_bounds = t.distance_bounds;
+    r.visible_markers = t.visible_markers;
+  }
+}
+
+}  // namespace
+
 // A statistic that cannot be computed from a run's stored values (a value
 // so large that its square overflows, one that is not finite) means the
 // database holds values no rig measured: bad input naming the database.
 RunStudy study_run(const std::string& database, const ReportOptions& options) {
-  const RunData data = report::load_run(database, options.run_id);
+  RunData data = report::load_run(database, options.run_id);
+  std::optional<RecomputedTruth> truth;
+  if (options.recompute_truth) {
+    std::vector<store::PositionRecord> positions;
+    positions.reserve(data.positions.size());
+    for (const PositionData& p : data.positions)
+      positions.push_back(p.record);
+    truth = options.recompute_truth(data.run, positions);
+    replace_truth(*truth, data);
+  }
   try {
-    return report::compute_study(data, options);
+    RunStudy study = report::compute_study(data, options);
+    if (truth) {
+      truth->positions.clear();  // the study keeps only the files it came from
+      study.truth = std::move(truth);
+    }
+    return study;
   } catch (const stats::StatsError& e) {
     throw ReportInputError(database + ": run " + std::to_string(data.run.id) +
                            ": cannot be reported: " + e.what() +
@@ -59,6 +92,8 @@ Report::Report(const std::string& database, const ReportOptions& options,
   if (baseline) {
     ReportOptions baseline_options = options;
     baseline_options.run_id = baseline->run_id;
+    // The baseline is judged against its own stored truth.
+    baseline_options.recompute_truth = nullptr;
     baseline_ = study_run(baseline->database, baseline_options);
     comparison_ = compare_runs(study_, *baseline_, options.significance_k);
   }

@@ -36,6 +36,16 @@ json files_json(const store::RunDescription& d) {
   return files;
 }
 
+// Where the run's truth comes from: "stored" (the sweep's own rig geometry and
+// calibration) or "recomputed" with the files it was recomputed from.
+json truth_json(const RunStudy& st) {
+  if (!st.truth) return {{"source", "stored"}, {"files", json::array()}};
+  json files = json::array();
+  for (const TruthFile& f : st.truth->files)
+    files.push_back({{"role", f.role}, {"path", f.path}, {"sha256", f.sha256}});
+  return {{"source", "recomputed"}, {"files", files}};
+}
+
 json to_json(const SolverStudy& s) {
   json j{{"solver", s.solver},
          {"scope", s.scope},
@@ -157,6 +167,7 @@ json to_json(const RunStudy& st) {
             {"host", st.run.description.host},
             {"camera", camera_json(st.run)},
             {"files", files_json(st.run.description)}}},
+          {"truth", truth_json(st)},
           {"positions", st.positions},
           {"failed_positions", st.failed_positions},
           {"positions_outside_classes", st.positions_outside_classes},

@@ -149,6 +149,20 @@ html::Table summary_table(const ReportInput& in) {
   return t;
 }
 
+// Which geometry and calibration the true distances, angles and bounds come
+// from: the run's stored files, or the files `rig report --geometry` named.
+std::string truth_fact(const RunStudy& st) {
+  if (!st.truth) return "from the read-backs with the run's own rig geometry and calibration";
+  std::string text = "recomputed from the read-backs with ";
+  bool first = true;
+  for (const TruthFile& f : st.truth->files) {
+    text +=
+        (first ? "" : ", ") + f.role + " " + f.path + " (sha256 " + f.sha256.substr(0, 12) + ")";
+    first = false;
+  }
+  return text;
+}
+
 }  // namespace
 
 std::vector<std::pair<std::string, std::string>> run_header(const RunStudy& st) {
@@ -166,6 +180,7 @@ std::vector<std::pair<std::string, std::string>> run_header(const RunStudy& st) 
       {"Target layout", file_fact(d.target_layout)},
       {"Rig geometry", file_fact(d.rig_geometry)},
       {"Bench profile", file_fact(d.bench_profile)},
+      {"Truth", truth_fact(st)},
       {"Positions", std::to_string(st.positions) + " measured of " + std::to_string(d.plan_size) +
                         " planned, " + std::to_string(st.frames) + " frames, " +
                         std::to_string(st.estimates) + " estimates"},

@@ -29,10 +29,11 @@ const std::array<const char*, kParameterCount> kParameterNames = {"fx",
                                                                   "target_tilt_z_deg",
                                                                   "camera_to_target_x_mm",
                                                                   "camera_to_target_y_mm",
-                                                                  "camera_to_target_z_mm"};
+                                                                  "camera_to_target_z_mm",
+                                                                  "target_scale_error"};
 const std::array<const char*, kParameterCount> kParameterUnits = {
-    "px",  "px",  "px",  "px",  "",    "",    "",   "",   "",
-    "deg", "deg", "deg", "deg", "deg", "deg", "mm", "mm", "mm"};
+    "px",  "px",  "px",  "px",  "",    "",   "",   "",   "", "deg",
+    "deg", "deg", "deg", "deg", "deg", "mm", "mm", "mm", ""};
 
 int parameter_index(const std::string& name) {
   for (int i = 0; i < kParameterCount; ++i)
@@ -58,7 +59,8 @@ Eigen::Matrix3d rotation(const double* r) {
 
 }  // namespace
 
-Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry& geometry) {
+Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry& geometry,
+                         double target_scale_error) {
   const vision::Intrinsics& k = camera.intrinsics();
   const vision::Distortion& dist = camera.distortion();
   Parameters p{k.fx, k.fy, k.cx, k.cy, dist.k1, dist.k2, dist.p1, dist.p2, dist.k3};
@@ -71,6 +73,7 @@ Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry
     p[static_cast<std::size_t>(kTilt + i)] = tilt[i];
     p[static_cast<std::size_t>(kOffset + i)] = d[i];
   }
+  p[kScale] = target_scale_error;
   return p;
 }
 
@@ -111,6 +114,7 @@ struct CornerResidual {
 
 // Scale of a parameter in the output: degrees for rotations, mm for d.
 double output_scale(int i) {
+  if (i == detail::kScale) return 1.0;
   if (i >= detail::kOffset) return 1000.0;
   if (i >= detail::kMisalignment) return 180.0 / detail::kPi;
   return 1.0;
@@ -120,9 +124,10 @@ std::vector<int> fixed_indices(const CalibrationOptions& options) {
   std::vector<int> fixed;
   for (const std::string& name : options.fixed) {
     const int i = parameter_index(name);
-    if (i < 0 || i >= kIntrinsicCount)
+    if (i < 0 || (i >= kIntrinsicCount && i != detail::kScale))
       throw CalibrationInputError("fixed parameter \"" + name +
-                                  "\": expected one of fx fy cx cy k1 k2 p1 p2 k3");
+                                  "\": expected one of fx fy cx cy k1 k2 p1 p2 k3 "
+                                  "target_scale_error");
     fixed.push_back(i);
   }
   return fixed;
@@ -265,6 +270,7 @@ CalibrationResult calibrate(const CalibrationProblem& input, const CalibrationOp
   CalibrationResult result;
   result.camera = detail::camera_of(p, input.nominal_camera);
   result.geometry = detail::geometry_of(p, input.nominal_geometry);
+  result.target_scale_error = p[detail::kScale];
   for (int i = 0; i < kParameterCount; ++i) {
     auto& e = result.parameters[static_cast<std::size_t>(i)];
     e.name = kParameterNames[static_cast<std::size_t>(i)];
@@ -286,8 +292,9 @@ CalibrationResult calibrate(const CalibrationProblem& input, const CalibrationOp
 
 double reprojection_rms_px(const CalibrationProblem& problem, const vision::Camera& camera,
                            const vision::RigGeometry& geometry,
-                           const std::vector<std::int64_t>& plan_indices) {
-  const Parameters p = detail::parameters_of(camera, geometry);
+                           const std::vector<std::int64_t>& plan_indices,
+                           double target_scale_error) {
+  const Parameters p = detail::parameters_of(camera, geometry, target_scale_error);
   double sum = 0;
   std::size_t n = 0;
   for (const CornerObservation& o : problem.corners) {
@@ -324,7 +331,8 @@ HeldOutCheck held_out_check(const CalibrationProblem& problem, CalibrationOption
   check.fit_positions = fit_positions.size();
   check.held_out_positions = held_positions.size();
   check.fit_rms_px = r.rms_px;
-  check.held_out_rms_px = reprojection_rms_px(held_out, r.camera, r.geometry);
+  check.held_out_rms_px =
+      reprojection_rms_px(held_out, r.camera, r.geometry, {}, r.target_scale_error);
   return check;
 }
 

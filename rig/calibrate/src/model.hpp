@@ -11,15 +11,17 @@
 namespace rig::calibrate::detail {
 
 // Parameter block layout: intrinsics (9), camera misalignment (3, radians),
-// target tilt (3, radians), camera-to-target offset at bench zero d (3, m).
-constexpr int kMisalignment = 9, kTilt = 12, kOffset = 15;
+// target tilt (3, radians), camera-to-target offset at bench zero d (3, m),
+// the sheet's print scale error s (1: the sheet is (1 + s) times its layout).
+constexpr int kMisalignment = 9, kTilt = 12, kOffset = 15, kScale = 18;
 
-// Projects target point P (m) with the carriage at (x_m, y_m) to distorted
-// pixels. R_nominal * v = (v2, -v0, -v1); R_nominal^T * w = (-w1, -w2, w0)
-// (vision::RigGeometry::R_bench_nominal).
+// Projects target point P (m, as laid out; printed at (1 + s) P) with the
+// carriage at (x_m, y_m) to distorted pixels. R_nominal * v = (v2, -v0, -v1); R_nominal^T * w =
+// (-w1, -w2, w0) (vision::RigGeometry::R_bench_nominal).
 template <typename T>
 void project(const T* p, const double P[3], double x_m, double y_m, T uv[2]) {
-  const T P_t[3] = {T(P[0]), T(P[1]), T(P[2])};
+  const T scale = T(1) + p[kScale];
+  const T P_t[3] = {scale * P[0], scale * P[1], scale * P[2]};
   T q[3];
   ceres::AngleAxisRotatePoint(p + kTilt, P_t, q);  // Rot(tilt) P
   // p_bench relative to the camera centre: R_nominal q + d - carriage
@@ -40,8 +42,10 @@ void project(const T* p, const double P[3], double x_m, double y_m, T uv[2]) {
 
 using Parameters = std::array<double, kParameterCount>;
 
-// The parameters of a camera and a geometry (d = t_bench_target - t_carriage_cam).
-Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry& geometry);
+// The parameters of a camera, a geometry (d = t_bench_target - t_carriage_cam)
+// and a print scale error.
+Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry& geometry,
+                         double target_scale_error = 0);
 // The camera of the parameters (size of `like`).
 vision::Camera camera_of(const Parameters& p, const vision::Camera& like);
 // The geometry of the parameters, keeping the camera offset of `nominal`.

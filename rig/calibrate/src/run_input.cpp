@@ -1,44 +1,15 @@
 // read_run (calibration.hpp): detections, read-backs and the stored files of a run.
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
 
 #include "config/reader.hpp"
 #include "db/store/store.hpp"
+#include "db/store/stored_file_copy.hpp"
 #include "rig/calibrate/calibration.hpp"
 
 namespace rig::calibrate {
 namespace {
-
-// A stored file written to a private temporary folder so that the loaders
-// that take a path read it; removed when done.
-class TemporaryCopy {
- public:
-  TemporaryCopy(const db::store::StoredFile& file, const std::string& fallback_name) {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "rig-calibrate-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr)
-      throw std::runtime_error("cannot create a temporary folder for the stored " + fallback_name);
-    dir_ = pattern;
-    const std::string name = std::filesystem::path(file.path).filename().string();
-    path_ = (dir_ / (name.empty() ? fallback_name : name)).string();
-    std::ofstream out(path_, std::ios::binary);
-    out << file.content;
-    if (!out) throw std::runtime_error("cannot write " + path_);
-  }
-  ~TemporaryCopy() {
-    std::error_code ignored;
-    std::filesystem::remove_all(dir_, ignored);
-  }
-  TemporaryCopy(const TemporaryCopy&) = delete;
-  TemporaryCopy& operator=(const TemporaryCopy&) = delete;
-  const std::string& path() const { return path_; }
-
- private:
-  std::filesystem::path dir_;
-  std::string path_;
-};
 
 db::store::Run pick_run(const db::store::Store& store, const std::string& db_path,
                         std::optional<std::int64_t> run_id) {
@@ -56,11 +27,11 @@ db::store::Run pick_run(const db::store::Store& store, const std::string& db_pat
 void read_stored_files(const db::store::Run& run, CalibrationProblem* p) {
   const db::store::RunDescription& d = run.description;
   if (!d.camera_calibration.content.empty()) {
-    const TemporaryCopy copy(d.camera_calibration, "camera.yaml");
+    const db::store::StoredFileCopy copy(d.camera_calibration, "camera.yaml");
     p->nominal_camera = vision::Camera::load(copy.path());
   }
   if (!d.target_layout.content.empty()) {
-    const TemporaryCopy copy(d.target_layout, "target.toml");
+    const db::store::StoredFileCopy copy(d.target_layout, "target.toml");
     p->target = vision::Target::load(copy.path());
   }
   if (d.rig_geometry.content.empty())

@@ -71,7 +71,8 @@ void add_calibrate_command(CLI::App& app, ExitStatus& status) {
       ->required();
   cmd->add_option("--out", args->out_dir, "Output directory (created if missing)")->required();
   cmd->add_option("--fix", args->fixed,
-                  "Hold an intrinsic at its nominal value: fx fy cx cy k1 k2 p1 p2 k3 "
+                  "Hold a parameter at its nominal value: fx fy cx cy k1 k2 p1 p2 k3, or "
+                  "target_scale_error (the sheet printed exactly at its layout's size) "
                   "(repeatable)");
   cmd->add_option("--huber-px", args->huber_px, "Robust loss scale, px")
       ->capture_default_str()

@@ -1,7 +1,10 @@
-// rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression] --out DIR:
+// rig report DB [--run ID] [--baseline DB[:RUN]] [--fail-on-regression]
+//            [--geometry FILE [--calibration FILE]] --out DIR:
 // the regression report of one run of a run database: report.html
 // (self-contained, printable), report.json (every figure's numbers) and one
-// CSV file per table, in DIR.
+// CSV file per table, in DIR. With --geometry (and --calibration), the run's
+// truth is recomputed from its stored read-backs under those files
+// (report_truth.hpp) instead of the geometry and calibration it ran with.
 //
 // Exit codes: 0 written; 1 a failure while reading or writing; 2 bad input
 // (missing file, not a rig database, newer or older schema, no completed run,
@@ -17,6 +20,7 @@
 
 #include "commands.hpp"
 #include "db/report/report.hpp"
+#include "report_truth.hpp"
 
 namespace rig::cli {
 namespace {
@@ -27,6 +31,7 @@ struct ReportArgs {
   std::string baseline;
   bool fail_on_regression = false;
   std::string out_dir;
+  std::string geometry, calibration;
   db::report::ReportOptions options;
 };
 
@@ -51,6 +56,10 @@ void check_report_args(const ReportArgs& a) {
     throw BadInput(
         "--fail-on-regression without --baseline: a regression is a comparison with a "
         "baseline; expected --baseline DB or DB:RUN");
+  if (!a.calibration.empty() && a.geometry.empty())
+    throw BadInput("--calibration " + a.calibration +
+                   " without --geometry: the truth is recomputed under a new rig geometry; "
+                   "expected --geometry FILE (e.g. the rig.toml rig calibrate wrote) with it");
   std::error_code ec;
   if (std::filesystem::exists(a.out_dir, ec) && !std::filesystem::is_directory(a.out_dir, ec))
     throw BadInput("--out " + a.out_dir +
@@ -62,6 +71,14 @@ int run_report(const ReportArgs& a) {
   check_report_args(a);
   db::report::ReportOptions options = a.options;
   options.run_id = a.run_id;
+  if (!a.geometry.empty()) {
+    TruthFiles files{a.geometry, std::nullopt};
+    if (!a.calibration.empty()) files.calibration = a.calibration;
+    options.recompute_truth = [files](const db::store::Run& run,
+                                      const std::vector<db::store::PositionRecord>& positions) {
+      return recompute_truth(files, run, positions);
+    };
+  }
   std::optional<db::report::RunReference> baseline;
   if (!a.baseline.empty()) baseline = db::report::RunReference::parse(a.baseline);
   const db::report::Report report(a.database, options, baseline);
@@ -92,6 +109,12 @@ void add_report_command(CLI::App& app, ExitStatus& status) {
   cmd->add_flag("--fail-on-regression", args->fail_on_regression,
                 "Exit with 3 when a solver got significantly worse than the baseline");
   cmd->add_option("--out", args->out_dir, "Output directory (created if missing)")->required();
+  cmd->add_option("--geometry", args->geometry,
+                  "Recompute the run's truth (distance, viewing angle, bounds) from its stored "
+                  "read-backs under this rig geometry file, e.g. rig calibrate's rig.toml");
+  cmd->add_option("--calibration", args->calibration,
+                  "With --geometry: the camera calibration of the recomputed truth (default: the "
+                  "run's stored one)");
   cmd->add_option("--ambiguity-threshold", args->options.ambiguity_ratio_threshold,
                   "Ambiguity ratio (better/worse planar solution error) from which an "
                   "estimate counts as ambiguous")
@@ -115,7 +138,9 @@ void add_report_command(CLI::App& app, ExitStatus& status) {
       "Exit codes: 0 written, 1 failure, 2 bad input, 3 regression (with --fail-on-regression).\n"
       "Example: rig report runs.db --out report/\n"
       "         rig report runs.db --run 7 --baseline main.db:3 --fail-on-regression --out "
-      "report/");
+      "report/\n"
+      "         rig report runs.db --geometry calibrated/rig.toml --calibration "
+      "calibrated/camera.yaml --out report/");
   cmd->callback(
       [&status, args] { status.code = run_command("report", [&] { return run_report(*args); }); });
 }

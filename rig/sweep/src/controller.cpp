@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "db/store/sha256.hpp"
+#include "external_estimates.hpp"
 #include "motion/errors.hpp"
 #include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/ground_truth.hpp"
@@ -136,13 +137,23 @@ class PositionMeasurer {
         log_(log),
         faults_(faults),
         measurer_(config.camera, config.target),
+        externals_(config.estimators, measurer_.camera(), measurer_.target()),
         frames_folder_(std::move(frames_folder)) {}
 
-  std::vector<std::string> solver_names() const { return measurer_.solver_names(); }
+  // The built-in solvers, then the external estimators ("ext:NAME").
+  std::vector<std::string> solver_names() const {
+    std::vector<std::string> names = measurer_.solver_names();
+    for (const std::string& name : externals_.solver_names())
+      names.push_back(name);
+    return names;
+  }
 
   // Before the first move: the folder the frames go to exists and takes new
   // files, or the run ends failed here.
-  void prepare() const {
+  // The external estimators are started here too (a failed start is
+  // recorded and contained like any estimator failure).
+  void prepare() {
+    externals_.start(log_);
     if (!frames_folder_) return;
     try {
       prepare_frames_folder(*frames_folder_);
@@ -368,7 +379,8 @@ class PositionMeasurer {
     rec.distance_bounds = truth.distance_bounds;
   }
 
-  // Detection and every solver on each frame, with the detect and solve stage times.
+  // Detection, every solver and every external estimator on each frame, with
+  // the detect and solve stage times.
   void measure_frames(std::int64_t index, const std::vector<vision::Frame>& frames,
                       db::store::PositionRecord& rec) {
     double detect_s = 0;
@@ -386,9 +398,15 @@ class PositionMeasurer {
       for (const auto& [name, s] : m.solve_s)
         solve_s[name] += s;
       rec.frames.push_back(frame_record(index, static_cast<int>(k), frames[k], m));
+      try {
+        externals_.measure(index, frames[k].image, rec.frames.back().image_path, m,
+                           rec.frames.back(), solve_s, log_);
+      } catch (const std::runtime_error& e) {
+        throw RunEnd{db::store::RunStatus::kFailed, e.what()};
+      }
     }
     rec.stage_times.push_back({"detect", detect_s});
-    for (const auto& name : measurer_.solver_names())
+    for (const auto& name : solver_names())
       rec.stage_times.push_back({"solve:" + name, solve_s[name]});
   }
 
@@ -436,6 +454,7 @@ class PositionMeasurer {
   RunLog& log_;
   FaultHandler& faults_;
   const vision::FrameMeasurer measurer_;
+  ExternalEstimates externals_;                               // the sweep file's [[estimator]]s
   const std::optional<std::filesystem::path> frames_folder_;  // set when frames are saved
 };
 

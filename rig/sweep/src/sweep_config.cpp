@@ -1,9 +1,13 @@
 // Reading and validating sweep files (see sweep_config.hpp).
 #include "rig/sweep/sweep_config.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <vector>
@@ -165,12 +169,20 @@ void read_capture(Table capture, SweepConfig* c) {
   read_camera(capture, c);
   c->frames_per_position = static_cast<int>(capture.integer_or("frames_per_position", 3, 1, 1000));
   c->capture.software_trigger = capture.boolean_or("software_trigger", true);
-  c->capture.pixel_format =
-      capture.choice_or("pixel_format", "Mono8", {"Mono8", "Mono10", "Mono12", "Mono16"});
+  c->capture.pixel_format = capture.choice_or(
+      "pixel_format", "Mono8", {"Mono8", "Mono10", "Mono12", "Mono12Packed", "Mono16", "BayerRG8"});
   c->capture.exposure_us = capture.optional_number(
       "exposure_us", {"an exposure time > 0 µs", [](double v) { return v > 0; }});
   c->capture.gain = capture.optional_number(
       "gain", {"a gain >= 0 (camera units, usually dB)", [](double v) { return v >= 0; }});
+  if (const auto packet = capture.optional_number(
+          "packet_size", {"a GigE Vision packet size in bytes, an integer 576..9000 (1500 on a "
+                          "standard MTU; more needs jumbo frames)",
+                          [](double v) { return v >= 576 && v <= 9000 && v == std::floor(v); }}))
+    c->capture.packet_size_bytes = static_cast<int>(*packet);
+  c->capture.inter_packet_delay_ns = capture.optional_number(
+      "inter_packet_delay_ns", {"a GigE Vision inter-packet delay in ns, 0..1e8",
+                                [](double v) { return v >= 0 && v <= 1e8; }});
   c->grab_timeout = std::chrono::milliseconds(
       capture.integer_or("grab_timeout_ms", c->grab_timeout.count(), 1, 3600000));
   c->capture.retries = static_cast<int>(capture.integer_or("retries", 2, 0, 100));
@@ -278,6 +290,69 @@ void read_telemetry(Table t, SweepConfig* c) {
   t.reject_unknown();
 }
 
+// A program name (looked up on PATH) or a path: the file it names, or "" when
+// there is no executable file of that name.
+std::string find_program(const std::string& program, const fs::path& folder) {
+  std::error_code ec;
+  const auto executable = [&](const fs::path& p) {
+    return fs::is_regular_file(p, ec) && ::access(p.c_str(), X_OK) == 0;
+  };
+  if (program.find('/') != std::string::npos) {
+    const fs::path p = fs::path(program).is_absolute() ? fs::path(program) : folder / program;
+    return executable(p) ? p.lexically_normal().string() : "";
+  }
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
+  for (std::size_t start = 0; start <= dirs.size();) {
+    const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+    const fs::path candidate = fs::path(dirs.substr(start, end - start)) / program;
+    if (end > start && executable(candidate)) return candidate.string();
+    start = end + 1;
+  }
+  return "";
+}
+
+estimator::EstimatorSpec read_estimator(Table& e, const std::set<std::string>& taken) {
+  estimator::EstimatorSpec spec;
+  const std::string name_rule = "a name of 1..64 characters A-Z a-z 0-9 _ . -";
+  spec.name = e.string("name", name_rule);
+  const bool name_ok =
+      !spec.name.empty() && spec.name.size() <= 64 &&
+      std::all_of(spec.name.begin(), spec.name.end(), [](char ch) {
+        return std::isalnum(static_cast<unsigned char>(ch)) || ch == '_' || ch == '.' || ch == '-';
+      });
+  if (!name_ok) e.fail("name", name_rule);
+  if (taken.count(spec.name)) e.fail("name", "a name no other [[estimator]] has", "used twice");
+  const std::string argv_rule = "the command as an array of 1..256 strings, program first";
+  spec.command = e.strings("command", 1, 256, argv_rule);
+  spec.working_dir = fs::path(e.resolve(".")).lexically_normal().string();
+  if (spec.working_dir.size() > 1 && spec.working_dir.back() == '/') spec.working_dir.pop_back();
+  if (spec.command[0].empty()) e.fail("command", argv_rule, "the program is \"\"");
+  if (find_program(spec.command[0], spec.working_dir).empty())
+    e.fail("command", argv_rule,
+           "\"" + spec.command[0] + "\" is not an executable file" +
+               (spec.command[0].find('/') != std::string::npos
+                    ? " (relative to " + spec.working_dir + ")"
+                    : " on PATH"));
+  spec.timeout = std::chrono::milliseconds(e.integer_or("timeout_ms", 2000, 1, 600000));
+  spec.startup_timeout =
+      std::chrono::milliseconds(e.integer_or("startup_timeout_ms", 10000, 1, 600000));
+  spec.max_restarts = static_cast<int>(e.integer_or("max_restarts", 3, 0, 1000));
+  spec.send_corners = e.boolean_or("send_corners", true);
+  e.reject_unknown();
+  return spec;
+}
+
+// [[estimator]] tables, when there are any.
+void read_estimators(Table& root, SweepConfig* c) {
+  if (!root.has("estimator")) return;
+  std::set<std::string> names;
+  for (Table& e : root.tables("estimator", "[[estimator]] tables with name and command")) {
+    c->estimators.push_back(read_estimator(e, names));
+    names.insert(c->estimators.back().name);
+  }
+}
+
 // The target in front of the camera (z_cam > 0) at every plan position.
 void check_target_in_front(const Table& rig, const SweepConfig& c) {
   const std::string rig_key = c.rig_geometry_path.empty() ? "target" : "file";
@@ -327,6 +402,20 @@ nlohmann::json optional_json(const std::optional<T>& v) {
 
 }  // namespace
 
+nlohmann::json SweepConfig::estimators_json() const {
+  nlohmann::json out = nlohmann::json::array();
+  for (const estimator::EstimatorSpec& e : estimators)
+    out.push_back({{"name", e.name},
+                   {"solver", e.solver_name()},
+                   {"command", e.command},
+                   {"working_dir", e.working_dir},
+                   {"timeout_ms", e.timeout.count()},
+                   {"startup_timeout_ms", e.startup_timeout.count()},
+                   {"max_restarts", e.max_restarts},
+                   {"send_corners", e.send_corners}});
+  return out;
+}
+
 nlohmann::json SweepConfig::to_json() const {
   using nlohmann::json;
   const vision::Intrinsics& k = camera.intrinsics();
@@ -348,6 +437,8 @@ nlohmann::json SweepConfig::to_json() const {
         {"pixel_format", capture.pixel_format},
         {"exposure_us", optional_json(capture.exposure_us)},
         {"gain", optional_json(capture.gain)},
+        {"packet_size", optional_json(capture.packet_size_bytes)},
+        {"inter_packet_delay_ns", optional_json(capture.inter_packet_delay_ns)},
         {"grab_timeout_ms", grab_timeout.count()},
         {"retries", capture.retries},
         {"save_frames", optional_json(frames_dir)}}},
@@ -395,6 +486,7 @@ nlohmann::json SweepConfig::to_json() const {
        {{"publish", telemetry.publish},
         {"control", telemetry.control},
         {"allow_remote", telemetry.allow_remote}}},
+      {"estimators", estimators_json()},
   };
 }
 
@@ -406,13 +498,13 @@ SweepConfig load_sweep_config(const std::string& path) {
   c.sweep_file_text = file.text();
   Table root = file.root();
   // Unknown tables first: a misspelt [setle] must not let its defaults be checked.
-  for (const char* name :
-       {"plan", "capture", "bench", "settle", "faults", "target", "rig", "database", "telemetry"}) {
+  for (const char* name : {"plan", "capture", "bench", "settle", "faults", "target", "rig",
+                           "database", "telemetry", "estimator"}) {
     root.ignore(name);
   }
   root.reject_unknown(
       "one of the tables [plan], [capture], [bench], [settle], [faults], [target], [rig], "
-      "[database], [telemetry]");
+      "[database], [telemetry], [[estimator]]");
   read_bench(root.table("bench"), &c);
   c.plan = read_plan(root.table("plan"), c.bench_profile.soft_limits);
   read_capture(root.table("capture"), &c);
@@ -424,6 +516,7 @@ SweepConfig load_sweep_config(const std::string& path) {
   read_rig(rig, &c);
   read_database(root.table("database"), &c);
   read_telemetry(root.optional_table("telemetry"), &c);
+  read_estimators(root, &c);
   // Consistency of the parts with each other.
   check_target_in_front(rig, c);
   check_settle_timeout(settle, c);

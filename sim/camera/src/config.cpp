@@ -35,6 +35,7 @@ void read_camera(config::Table camera, SimRigConfig* c) {
       camera.number_or("nominal_exposure_us", o.nominal_exposure_us, config::positive());
   o.seed = static_cast<std::uint64_t>(
       camera.integer_or("seed", static_cast<std::int64_t>(o.seed), 0, INT64_MAX));
+  o.genicam = camera.choice_or("genicam", o.genicam, {"sfnc", "legacy"});
   camera.reject_unknown();
 }
 
@@ -93,8 +94,11 @@ std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
   options.exposure_time_s = config.camera.nominal_exposure_us * 1e-6;
   auto renderer = std::make_shared<const scene::SceneRenderer>(truth.camera, truth.target,
                                                                vision::Codebook(), options);
+  CameraServerOptions camera = config.camera;
+  camera.bayer_rg = config.realism.bayer_rg;
+  camera.filter_response = config.realism.filter_response;
   return std::make_unique<CameraServer>(std::move(renderer), truth.geometry, std::move(position),
-                                        config.camera);
+                                        camera);
 }
 
 }  // namespace sim::camera

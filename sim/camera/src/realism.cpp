@@ -43,6 +43,23 @@ void read_rig_truth(config::Table t, TruthSpread* s) {
   t.reject_unknown();
 }
 
+// [sensor] bayer = "RG" and filter_response = [r, g, b]: a colour filter
+// array in front of the sensor (what the camera puts on the wire only).
+void read_colour_filter(config::Table& sensor, RealismProfile* p) {
+  const std::string bayer = sensor.string_or("bayer", "", "\"RG\" (an RGGB mosaic), or absent");
+  if (!bayer.empty() && bayer != "RG")
+    sensor.fail("bayer", "\"RG\" (an RGGB mosaic, GenICam BayerRG8), or absent for a mono sensor");
+  p->bayer_rg = bayer == "RG";
+  if (!sensor.has("filter_response")) return;
+  if (!p->bayer_rg) sensor.fail("filter_response", "no filter_response without bayer = \"RG\"");
+  const std::vector<double> v =
+      sensor.numbers("filter_response", 3, 3, "[r, g, b], three numbers in 0 .. 1");
+  for (size_t k = 0; k < 3; ++k) {
+    if (!(v[k] >= 0 && v[k] <= 1)) sensor.fail("filter_response", "[r, g, b], each in 0 .. 1");
+    p->filter_response[k] = v[k];
+  }
+}
+
 void read_scene(config::Table light, config::Table optics, config::Table sensor,
                 scene::SceneOptions* o) {
   o->paper_reflectance = light.number_or("paper_reflectance", o->paper_reflectance, within(0, 1));
@@ -66,7 +83,7 @@ void read_scene(config::Table light, config::Table optics, config::Table sensor,
       sensor.number_or("full_well_electrons", o->full_well_electrons, within(100, 1e7));
   o->read_noise_electrons =
       sensor.number_or("read_noise_electrons", o->read_noise_electrons, within(0, 1e5));
-  o->adc_bits = static_cast<int>(sensor.integer_or("adc_bits", o->adc_bits, 1, 8));
+  o->adc_bits = static_cast<int>(sensor.integer_or("adc_bits", o->adc_bits, 1, 16));
   o->noise = sensor.boolean_or("noise", o->noise);
   o->dark_current_e_per_s =
       sensor.number_or("dark_current_e_per_s", o->dark_current_e_per_s, within(0, 1e6));
@@ -157,8 +174,9 @@ RealismProfile load_realism_profile(const std::string& path) {
   config::Table target = root.optional_table("target");
   p.print_scale_error = target.number_or("print_scale_error", 0, within(-0.05, 0.05));
   target.reject_unknown();
-  read_scene(root.optional_table("light"), root.optional_table("optics"),
-             root.optional_table("sensor"), &p.scene);
+  config::Table sensor = root.optional_table("sensor");
+  read_colour_filter(sensor, &p);
+  read_scene(root.optional_table("light"), root.optional_table("optics"), sensor, &p.scene);
   config::Table bench = root.optional_table("bench");
   p.bench_x = read_bench_axis(bench.optional_table("x"));
   p.bench_y = read_bench_axis(bench.optional_table("y"));

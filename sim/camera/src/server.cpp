@@ -8,16 +8,20 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <stdexcept>
 #include <string>
 #include <thread>
 #include <tuple>
 #include <vector>
+
+#include "sim/camera/genicam_xml.hpp"
 
 namespace sim::camera {
 
@@ -35,6 +39,71 @@ void write_bootstrap_string(ArvFakeCamera* camera, guint32 address, const std::s
   char bytes[kBootstrapStringBytes] = {};
   std::memcpy(bytes, text.data(), std::min(text.size(), kBootstrapStringBytes - 1));
   arv_fake_camera_write_memory(camera, address, kBootstrapStringBytes, bytes);
+}
+
+// The pixel formats the camera serves (its GenICam XML's PixelFormat
+// entries): bits per pixel of the values on the wire; 0 for others.
+struct WireFormat {
+  int bits = 0;
+};
+
+WireFormat wire_format(ArvPixelFormat format) {
+  switch (format) {
+    case ARV_PIXEL_FORMAT_MONO_8:
+    case ARV_PIXEL_FORMAT_BAYER_RG_8:
+      return {8};
+    case ARV_PIXEL_FORMAT_MONO_10:
+      return {10};
+    case ARV_PIXEL_FORMAT_MONO_12:
+    case ARV_PIXEL_FORMAT_MONO_12_PACKED:
+      return {12};
+    case ARV_PIXEL_FORMAT_MONO_16:
+      return {16};
+    default:
+      return {};
+  }
+}
+
+// code -> wire value: full scale onto full scale, round(code (2^wire - 1) /
+// (2^source - 1)) (exactly the code when the depths agree; an 8-bit code in
+// Mono16 is code x 257), times a colour filter's response.
+std::vector<uint16_t> wire_levels(int source_bits, int wire_bits, double response) {
+  const double source_max = static_cast<double>((1 << source_bits) - 1);
+  const double wire_max = static_cast<double>((1 << wire_bits) - 1);
+  std::vector<uint16_t> table(static_cast<size_t>(source_max) + 1);
+  for (size_t code = 0; code < table.size(); ++code) {
+    const double exact = static_cast<double>(code) * response;
+    table[code] = static_cast<uint16_t>(
+        source_bits == wire_bits ? std::lround(exact) : std::lround(exact * wire_max / source_max));
+  }
+  return table;
+}
+
+// The values in the format's layout (GigE Vision: little-endian 16-bit words
+// for Mono10/12/16; Mono12Packed two pixels in three bytes, B0 = P0[11:4],
+// B1 = P1[3:0] << 4 | P0[3:0], B2 = P1[11:4]), at most `capacity` bytes.
+void pack(const std::vector<uint16_t>& v, ArvPixelFormat format, int bits, uint8_t* out,
+          size_t capacity) {
+  std::memset(out, 0, capacity);
+  const auto put = [out, capacity](size_t at, unsigned value) {
+    if (at < capacity) out[at] = static_cast<uint8_t>(value);
+  };
+  if (format == ARV_PIXEL_FORMAT_MONO_12_PACKED) {
+    for (size_t i = 0, b = 0; i < v.size(); i += 2, b += 3) {
+      const unsigned p0 = v[i], p1 = i + 1 < v.size() ? v[i + 1] : 0u;
+      put(b, p0 >> 4);
+      put(b + 1, (p1 & 0x0Fu) << 4 | (p0 & 0x0Fu));
+      put(b + 2, p1 >> 4);
+    }
+  } else if (bits == 8) {
+    for (size_t i = 0; i < v.size(); ++i)
+      put(i, v[i]);
+  } else {
+    for (size_t i = 0; i < v.size(); ++i) {
+      put(2 * i, v[i] & 0xFFu);
+      put(2 * i + 1, v[i] >> 8u);
+    }
+  }
 }
 
 }  // namespace
@@ -89,34 +158,41 @@ struct CameraServer::Impl {
 
   // Writes the buffer's region (Width x Height at OffsetX, OffsetY) of the
   // rendered image in the buffer's pixel format; outside the image is black.
-  static void copy_region(ArvBuffer* buffer, const cv::Mat& image, ArvPixelFormat format) {
+  void copy_region(ArvBuffer* buffer, const cv::Mat& image, ArvPixelFormat format) const {
     const int width = arv_buffer_get_image_width(buffer);
     const int height = arv_buffer_get_image_height(buffer);
     const int x_offset = arv_buffer_get_image_x(buffer);
     const int y_offset = arv_buffer_get_image_y(buffer);
-    const int bytes_per_pixel = static_cast<int>(ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format)) / 8;
-    // Aravis allocated width * height * bytes_per_pixel (arv_fake_camera_get_payload)
-    // and checked it before calling us.
+    // Aravis allocated at least width * height * bits per pixel / 8 bytes
+    // (arv_fake_camera_get_payload) and checked it before calling us.
+    const size_t capacity = static_cast<size_t>(width) * static_cast<size_t>(height) *
+                            ARV_PIXEL_FORMAT_BIT_PER_PIXEL(format) / 8;
     auto* out = static_cast<uint8_t*>(const_cast<void*>(arv_buffer_get_data(buffer, nullptr)));
-    if (out == nullptr || width <= 0 || height <= 0 || bytes_per_pixel <= 0) return;
-    std::memset(out, 0, static_cast<size_t>(width) * height * bytes_per_pixel);
+    const WireFormat wire = wire_format(format);
+    if (out == nullptr || width <= 0 || height <= 0 || wire.bits == 0) return;
+    // The sensor's codes: 0 .. 255 for an ADC of up to 8 bits, else 0 .. 2^adc_bits - 1.
+    const int source_bits = image.depth() == CV_16U ? server->renderer_->options().adc_bits : 8;
+    const bool mosaic = format == ARV_PIXEL_FORMAT_BAYER_RG_8;
+    const CameraServerOptions& o = server->options_;
+    // One table per colour filter (R, G, B); a mono format uses the first.
+    std::array<std::vector<uint16_t>, 3> table;
+    for (size_t c = 0; c < (mosaic ? 3u : 1u); ++c)
+      table[c] = wire_levels(source_bits, wire.bits, mosaic ? o.filter_response[c] : 1.0);
+    std::vector<uint16_t> values(static_cast<size_t>(width) * static_cast<size_t>(height), 0);
     const cv::Rect region =
         cv::Rect(x_offset, y_offset, width, height) & cv::Rect(0, 0, image.cols, image.rows);
     for (int y = region.y; y < region.y + region.height; ++y) {
-      const uint8_t* row = image.ptr<uint8_t>(y);
-      uint8_t* dst = out + (static_cast<size_t>(y - y_offset) * width + (region.x - x_offset)) *
-                               bytes_per_pixel;
       for (int x = region.x; x < region.x + region.width; ++x) {
-        const uint8_t v = row[x];
-        if (format == ARV_PIXEL_FORMAT_MONO_16) {
-          const uint16_t v16 = static_cast<uint16_t>(v * 257);  // full 8-bit range onto 16 bits
-          std::memcpy(dst, &v16, 2);                            // GVSP Mono16 is little-endian
-        } else {
-          std::memset(dst, v, static_cast<size_t>(bytes_per_pixel));  // Mono8, Bayer 8, RGB8: grey
-        }
-        dst += bytes_per_pixel;
+        const int code =
+            image.depth() == CV_16U ? image.at<uint16_t>(y, x) : image.at<uint8_t>(y, x);
+        // RGGB from the buffer's first pixel: R on even rows and columns, B on odd ones.
+        const int rx = x - x_offset, ry = y - y_offset;
+        const size_t filter =
+            !mosaic ? 0 : (ry % 2 == 0 ? (rx % 2 == 0 ? 0 : 1) : (rx % 2 == 0 ? 1 : 2));
+        values[static_cast<size_t>(ry) * width + rx] = table[filter][static_cast<size_t>(code)];
       }
     }
+    pack(values, format, wire.bits, out, capacity);
   }
 };
 
@@ -132,6 +208,13 @@ CameraServer::CameraServer(std::shared_ptr<const scene::SceneRenderer> renderer,
   if (!(options_.trigger_poll_hz > 0) || !(options_.nominal_exposure_us > 0))
     throw std::invalid_argument(
         "sim::camera::CameraServer: trigger_poll_hz and nominal_exposure_us must be > 0");
+  if (options_.genicam != "sfnc" && options_.genicam != "legacy")
+    throw std::invalid_argument("sim::camera::CameraServer: genicam \"" + options_.genicam +
+                                "\": expected \"sfnc\" or \"legacy\"");
+  for (double r : options_.filter_response)
+    if (!(r >= 0 && r <= 1))
+      throw std::invalid_argument(
+          "sim::camera::CameraServer: filter_response values must be within 0 .. 1");
   if (options_.serial.empty() || options_.serial.size() >= 16)
     throw std::invalid_argument("sim::camera::CameraServer: serial '" + options_.serial +
                                 "' must have 1 to 15 characters");
@@ -176,6 +259,37 @@ std::string ipv4_addresses_of(const std::vector<std::string>& found) {
   return listed;
 }
 
+// The camera's GenICam XML in a file of its own for as long as Aravis reads
+// it (arv_gv_fake_camera_new_full reads the file whole, then it is removed).
+class GenicamFile {
+ public:
+  explicit GenicamFile(const char* xml) {
+    const std::string pattern =
+        (std::filesystem::temp_directory_path() / "rig-sim-genicam-XXXXXX").string();
+    std::vector<char> name(pattern.begin(), pattern.end());
+    name.push_back('\0');
+    const int fd = mkstemp(name.data());
+    if (fd < 0)
+      throw std::runtime_error("sim camera: cannot write its GenICam file " + pattern + ": " +
+                               std::strerror(errno));
+    const size_t size = std::strlen(xml);
+    const bool written = write(fd, xml, size) == static_cast<ssize_t>(size);
+    ::close(fd);
+    path_ = name.data();
+    if (!written) {
+      unlink(path_.c_str());
+      throw std::runtime_error("sim camera: cannot write its GenICam file " + path_);
+    }
+  }
+  ~GenicamFile() { unlink(path_.c_str()); }
+  GenicamFile(const GenicamFile&) = delete;
+  GenicamFile& operator=(const GenicamFile&) = delete;
+  const char* path() const { return path_.c_str(); }
+
+ private:
+  std::string path_;
+};
+
 // Throws when `address` is neither an address nor a name of an interface
 // (Aravis serves GigE Vision only on an interface's own address), or when
 // another camera holds its control port 3956.
@@ -218,8 +332,9 @@ void CameraServer::start() {
   check_camera_address(options_.interface_address);
   auto impl = std::make_unique<Impl>();
   impl->server = this;
-  impl->gv_camera = arv_gv_fake_camera_new_full(options_.interface_address.c_str(),
-                                                options_.serial.c_str(), nullptr);
+  impl->gv_camera = arv_gv_fake_camera_new_full(
+      options_.interface_address.c_str(), options_.serial.c_str(),
+      GenicamFile(options_.genicam == "legacy" ? kGenicamLegacyXml : kGenicamSfncXml).path());
   if (impl->gv_camera == nullptr || !arv_gv_fake_camera_is_running(impl->gv_camera)) {
     if (impl->gv_camera != nullptr) g_object_unref(impl->gv_camera);
     throw std::runtime_error("sim camera: Aravis cannot serve GigE Vision on '" +
@@ -240,6 +355,9 @@ void CameraServer::start() {
   write_bootstrap_string(camera, kManufacturerNameAddress, options_.vendor_name);
   write_bootstrap_string(camera, kModelNameAddress, options_.model_name);
   write_bootstrap_string(camera, kDeviceVersionAddress, options_.device_version);
+  if (options_.bayer_rg)
+    arv_fake_camera_write_register(camera, ARV_FAKE_CAMERA_REGISTER_PIXEL_FORMAT,
+                                   ARV_PIXEL_FORMAT_BAYER_RG_8);
   arv_fake_camera_set_fill_pattern(camera, &Impl::fill, impl.get());
   impl_ = std::move(impl);
 }

@@ -48,7 +48,7 @@ void validate(const SceneOptions& o) {
   check(o.exposure > 0 && o.exposure <= 10, "exposure", o.exposure, "in (0, 10]");
   check(o.full_well_electrons >= 100, "full_well_electrons", o.full_well_electrons, ">= 100");
   check(o.read_noise_electrons >= 0, "read_noise_electrons", o.read_noise_electrons, ">= 0");
-  check(o.adc_bits >= 1 && o.adc_bits <= 8, "adc_bits", o.adc_bits, "1 .. 8");
+  check(o.adc_bits >= 1 && o.adc_bits <= 16, "adc_bits", o.adc_bits, "1 .. 16");
   check(o.clutter_shapes >= 0, "clutter_shapes", o.clutter_shapes, ">= 0");
   check(o.occluders >= 0, "occluders", o.occluders, ">= 0");
   check(o.occluder_min_width_px > 0 && o.occluder_max_width_px >= o.occluder_min_width_px,

@@ -72,20 +72,42 @@ FixedPattern make_fixed_pattern(int width, int height, double prnu_rel, double d
 
 namespace {
 
+// The ADC: a DN on the 8-bit scale (0 .. 255 = 0 .. full well) to the code
+// of an adc_bits converter. Up to 8 bits the code stays on the 8-bit scale in
+// steps of 2^(8 - bits); above 8, it is 0 .. 2^bits - 1 (the same full well
+// in finer steps), stored in 16 bits.
+struct Quantizer {
+  explicit Quantizer(int adc_bits) {
+    const int bits = std::clamp(adc_bits, 1, 16);
+    code_per_dn = bits > 8 ? static_cast<float>(((1 << bits) - 1) / 255.0) : 1.0f;
+    step = static_cast<float>(1 << (8 - std::min(bits, 8)));
+    inv_step = 1.0f / step;
+    max_level =
+        bits > 8 ? static_cast<float>((1 << bits) - 1) : std::floor(255.0f * inv_step) * step;
+  }
+  // Truncation of a non-negative value + 0.5 rounds to the nearest level.
+  float operator()(float dn) const {
+    const float level =
+        static_cast<float>(static_cast<int>(std::max(dn, 0.0f) * code_per_dn * inv_step + 0.5f)) *
+        step;
+    return std::min(level, max_level);
+  }
+  float code_per_dn, step, inv_step, max_level;
+};
+
 // The physical path of apply_sensor (see sensor.hpp): electrons first, then
 // the gain.
+template <typename Out>
 void apply_sensor_physical(const float* in, size_t n, const SensorModel& model,
                            const NormalTable& normal, uint64_t seed, const FixedPattern& pattern,
-                           uint8_t* o) {
+                           Out* o) {
   const float full_well = static_cast<float>(model.full_well_electrons);
   const float e_per_dn = static_cast<float>(model.signal_scale * model.full_well_electrons / 255.0);
   const float dn_per_e = static_cast<float>(255.0 / model.full_well_electrons * model.gain);
   const float read_var =
       static_cast<float>(model.read_noise_electrons * model.read_noise_electrons);
   const float dark = static_cast<float>(model.dark_electrons);
-  const float step = static_cast<float>(1 << (8 - std::clamp(model.adc_bits, 1, 8)));
-  const float inv_step = 1.0f / step;
-  const float max_level = std::floor(255.0f * inv_step) * step;
+  const Quantizer adc(model.adc_bits);
   const bool fixed = !pattern.empty();
   uint64_t state = seed * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull;
   uint64_t bits = 0;
@@ -100,33 +122,20 @@ void apply_sensor_physical(const float* in, size_t n, const SensorModel& model,
       e += std::sqrt(std::max(e, 0.0f) + read_var) * z;
     }
     const float dn = std::clamp(e, 0.0f, full_well) * dn_per_e;
-    const float level = static_cast<float>(static_cast<int>(dn * inv_step + 0.5f)) * step;
-    o[i] = static_cast<uint8_t>(std::min(level, max_level));
+    o[i] = static_cast<Out>(adc(dn));
   }
 }
 
-}  // namespace
-
-cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const NormalTable& normal,
-                     uint64_t seed, const FixedPattern& pattern) {
-  CV_Assert(ideal_dn.type() == CV_32FC1 && ideal_dn.isContinuous());
-  if (!pattern.empty() || model.dark_electrons != 0 || model.signal_scale != 1 || model.gain != 1) {
-    cv::Mat out(ideal_dn.size(), CV_8UC1);
-    apply_sensor_physical(ideal_dn.ptr<float>(), ideal_dn.total(), model, normal, seed, pattern,
-                          out.ptr<uint8_t>());
-    return out;
-  }
-  cv::Mat out(ideal_dn.size(), CV_8UC1);
-  const float* in = ideal_dn.ptr<float>();
-  uint8_t* o = out.ptr<uint8_t>();
-  const size_t n = ideal_dn.total();
+// The shot and read noise of apply_sensor without a fixed pattern, dark
+// signal, signal scale or gain (see sensor.hpp).
+template <typename Out>
+void apply_sensor_plain(const float* in, size_t n, const SensorModel& model,
+                        const NormalTable& normal, uint64_t seed, Out* o) {
   const float e_per_dn = static_cast<float>(model.full_well_electrons / 255.0);
   const float dn_per_e = 1.0f / e_per_dn;
   const float read_var =
       static_cast<float>(model.read_noise_electrons * model.read_noise_electrons);
-  const float step = static_cast<float>(1 << (8 - std::clamp(model.adc_bits, 1, 8)));
-  const float inv_step = 1.0f / step;
-  const float max_level = std::floor(255.0f * inv_step) * step;
+  const Quantizer adc(model.adc_bits);
   uint64_t state = seed * 0xD1B54A32D192ED03ull + 0x8CB92BA72F3D8DD7ull;
   uint64_t bits = 0;
   for (size_t i = 0; i < n; ++i) {
@@ -138,12 +147,30 @@ cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const No
       bits >>= 16;
       dn += std::sqrt(e + read_var) * z * dn_per_e;
     }
-    // Truncation of a non-negative value + 0.5 rounds to the nearest level.
-    const float level =
-        static_cast<float>(static_cast<int>(std::max(dn, 0.0f) * inv_step + 0.5f)) * step;
-    o[i] = static_cast<uint8_t>(std::min(level, max_level));
+    o[i] = static_cast<Out>(adc(dn));
   }
+}
+
+template <typename Out>
+cv::Mat apply_sensor_as(const cv::Mat& ideal_dn, const SensorModel& model,
+                        const NormalTable& normal, uint64_t seed, const FixedPattern& pattern) {
+  cv::Mat out(ideal_dn.size(), cv::DataType<Out>::type);
+  if (!pattern.empty() || model.dark_electrons != 0 || model.signal_scale != 1 || model.gain != 1)
+    apply_sensor_physical(ideal_dn.ptr<float>(), ideal_dn.total(), model, normal, seed, pattern,
+                          out.ptr<Out>());
+  else
+    apply_sensor_plain(ideal_dn.ptr<float>(), ideal_dn.total(), model, normal, seed,
+                       out.ptr<Out>());
   return out;
+}
+
+}  // namespace
+
+cv::Mat apply_sensor(const cv::Mat& ideal_dn, const SensorModel& model, const NormalTable& normal,
+                     uint64_t seed, const FixedPattern& pattern) {
+  CV_Assert(ideal_dn.type() == CV_32FC1 && ideal_dn.isContinuous());
+  return model.adc_bits > 8 ? apply_sensor_as<uint16_t>(ideal_dn, model, normal, seed, pattern)
+                            : apply_sensor_as<uint8_t>(ideal_dn, model, normal, seed, pattern);
 }
 
 }  // namespace sim::scene::detail

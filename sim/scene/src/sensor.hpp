@@ -46,7 +46,9 @@ class NormalTable {
 // Returns CV_8UC1: DN = round((e + sqrt(e + read^2) * N(0, 1)) * 255 / full_well)
 // with e = ideal_dn * full_well / 255 electrons (Poisson shot noise in its
 // Gaussian limit, accurate for e >> 10, i.e. above ~0.1 DN at 20000 e-),
-// quantized to adc_bits and clipped to 0 .. 255.
+// quantized to adc_bits and clipped to 0 .. 255. With adc_bits 9 .. 16:
+// CV_16UC1, the same DN times (2^adc_bits - 1) / 255, rounded and clipped to
+// 0 .. 2^adc_bits - 1 (the same electrons and noise draws, a finer ADC).
 //
 // With a fixed pattern, a dark signal, a signal scale or a gain (the physical
 // path): e = signal_scale * ideal_dn * full_well / 255 * prnu + dark + dsnu,

@@ -46,8 +46,8 @@ TEST(CalibrateCli, WritesFilesThatRigReads) {
   EXPECT_EQ(g.T_carriage_cam.t, Eigen::Vector3d::Zero());
   std::ifstream in(out + "/calibration.json");
   const nlohmann::json j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["parameters"].size(), 18u);
-  EXPECT_EQ(j["correlation"]["matrix"].size(), 18u);
+  EXPECT_EQ(j["parameters"].size(), 19u);
+  EXPECT_EQ(j["correlation"]["matrix"].size(), 19u);
   EXPECT_GT(j["held_out"]["held_out_positions"].get<int>(), 100);
   // Held out, the prediction is at the noise floor: 0.1 px per coordinate is
   // 0.141 px of |r|; +10 % for the parameter error.

@@ -7,8 +7,9 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <opencv2/calib3d.hpp>
 
+#include "db/stats/descriptive.hpp"
+#include "opencv_reference.hpp"
 #include "rig/calibrate/calibration.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_calibration.hpp"
@@ -44,15 +45,6 @@ CalibrationProblem problem_for(const db_test::ScratchDir& dir, std::uint64_t see
   const std::string db = dir.file("seed" + std::to_string(seed) + ".db");
   const std::int64_t run = rig_test::write_calibration_run(db, spec(seed, std::move(plan)));
   return rig::calibrate::read_run(db, run);
-}
-
-double sample_sd(const std::vector<double>& v) {
-  double mean = 0, ss = 0;
-  for (const double x : v)
-    mean += x / static_cast<double>(v.size());
-  for (const double x : v)
-    ss += (x - mean) * (x - mean);
-  return std::sqrt(ss / static_cast<double>(v.size() - 1));
 }
 
 // Accuracy targets: fx, fy within 0.02 %; cx within 0.2 px; the camera's
@@ -107,7 +99,7 @@ TEST(Calibrate, RecoversTrueCameraAndGeometryOverTenSeeds) {
   // chi2_9 > 36 (4e-5): the brief's factor of 2 is a 99 % interval per
   // parameter; the seeds are fixed, so the outcome is too.
   for (const int i : checked) {
-    const double spread = sample_sd(values[i]);
+    const double spread = db::stats::summarize(values[i]).sd;
     double stated = 0;
     for (const double s : sds[i])
       stated += s / 10.0;
@@ -171,75 +163,21 @@ TEST(Calibrate, FixedParameterKeepsItsNominalValue) {
   EXPECT_THROW(rig::calibrate::calibrate(problem, options), rig::calibrate::CalibrationInputError);
 }
 
-// cv::calibrateCamera on the same detections, each position a separate view
-// (initial guess: the nominal camera). It cannot predict a position without a
-// rig geometry, so its held-out prediction uses the nominal (hand-measured)
-// geometry; the per-view solvePnP refit is printed for information only.
-struct OpenCvFit {
-  vision::Camera camera = vision::Camera::paper_default();
-  double pnp_held_out_rms_px = 0;
-};
-
-OpenCvFit opencv_calibrate(const CalibrationProblem& fit, const CalibrationProblem& held_out) {
-  const auto views = [](const CalibrationProblem& p) {
-    std::map<std::int64_t, std::pair<std::vector<cv::Point3f>, std::vector<cv::Point2f>>> v;
-    for (const auto& o : p.corners) {
-      v[o.plan_index].first.emplace_back(o.target_point_m.x(), o.target_point_m.y(), 0.0f);
-      v[o.plan_index].second.emplace_back(o.pixel.x(), o.pixel.y());
-    }
-    return v;
-  };
-  std::vector<std::vector<cv::Point3f>> object;
-  std::vector<std::vector<cv::Point2f>> image;
-  for (const auto& [index, view] : views(fit)) {
-    if (view.first.size() < 8) continue;
-    object.push_back(view.first);
-    image.push_back(view.second);
-  }
-  cv::Mat K = fit.nominal_camera.camera_matrix_cv(), dist = fit.nominal_camera.distortion_cv();
-  std::vector<cv::Mat> rvecs, tvecs;
-  cv::calibrateCamera(object, image,
-                      cv::Size(fit.nominal_camera.width_px(), fit.nominal_camera.height_px()), K,
-                      dist, rvecs, tvecs, cv::CALIB_USE_INTRINSIC_GUESS);
-  OpenCvFit out;
-  out.camera = vision::Camera(
-      {K.at<double>(0, 0), K.at<double>(1, 1), K.at<double>(0, 2), K.at<double>(1, 2)},
-      {dist.at<double>(0), dist.at<double>(1), dist.at<double>(2), dist.at<double>(3),
-       dist.at<double>(4)},
-      736, 571);
-  double sum = 0;
-  std::size_t n = 0;
-  for (const auto& [index, view] : views(held_out)) {
-    if (view.first.size() < 4) continue;
-    cv::Mat rvec, tvec;
-    cv::solvePnP(view.first, view.second, K, dist, rvec, tvec);
-    std::vector<cv::Point2f> projected;
-    cv::projectPoints(view.first, rvec, tvec, K, dist, projected);
-    for (std::size_t i = 0; i < projected.size(); ++i) {
-      const cv::Point2f e = projected[i] - view.second[i];
-      sum += e.dot(e);
-      ++n;
-    }
-  }
-  out.pnp_held_out_rms_px = std::sqrt(sum / static_cast<double>(n));
-  return out;
-}
-
+// cv::calibrateCamera: tests/rig/calibrate/opencv_reference.hpp. Its held-out
+// prediction from the read-backs uses the nominal (hand-measured) geometry.
 TEST(Calibrate, BeatsOpenCvCalibrateCameraOnTheSameDetections) {
   const db_test::ScratchDir dir;
   const CalibrationProblem problem = problem_for(dir, 5, calibration_plan());
   const CalibrationProblem even = rig::calibrate::alternate_positions(problem, true);
   const CalibrationProblem odd = rig::calibrate::alternate_positions(problem, false);
   const CalibrationResult ours = rig::calibrate::calibrate(even, CalibrationOptions{});
-  const OpenCvFit cv_fit = opencv_calibrate(even, odd);
+  const rig_test::OpenCvFit cv_fit = rig_test::opencv_calibrate(even, odd);
   const double ours_held_out = rig::calibrate::reprojection_rms_px(odd, ours.camera, ours.geometry);
   const double cv_held_out =
       rig::calibrate::reprojection_rms_px(odd, cv_fit.camera, problem.nominal_geometry);
   const vision::Intrinsics t = rig_test::calibration_true_camera().intrinsics();
-  const vision::Intrinsics& a = ours.camera.intrinsics();
-  const vision::Intrinsics& b = cv_fit.camera.intrinsics();
-  const double ours_err[4] = {a.fx - t.fx, a.fy - t.fy, a.cx - t.cx, a.cy - t.cy};
-  const double cv_err[4] = {b.fx - t.fx, b.fy - t.fy, b.cx - t.cx, b.cy - t.cy};
+  const std::array<double, 4> ours_err = rig_test::intrinsics_error_px(ours.camera, t);
+  const std::array<double, 4> cv_err = rig_test::intrinsics_error_px(cv_fit.camera, t);
   std::printf("| figure (fit: even positions) | rig calibrate | cv::calibrateCamera |\n");
   std::printf("|---|---|---|\n");
   const char* names[4] = {"fx error, px", "fy error, px", "cx error, px", "cy error, px"};

@@ -375,7 +375,7 @@ const std::string kProfile = "profile = \"" + kConfig + "/benches/sim.toml\"";
 const std::string kGrid = "kind = \"grid\"\nx_mm = [0, 900, 100]\ny_mm = [140, 160, 10]";
 const std::string kCaptureKeys =
     "camera, calibration, frames_per_position, software_trigger, pixel_format, exposure_us, "
-    "gain, grab_timeout_ms, retries, save_frames";
+    "gain, packet_size, inter_packet_delay_ns, grab_timeout_ms, retries, save_frames";
 
 INSTANTIATE_TEST_SUITE_P(
     Cases, SweepConfigMalformed,
@@ -386,7 +386,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown_table", "[settle]", "[setle]",
                 "setle = { dwell_ms = 0 }: unknown key (misspelt?); expected one of the tables "
                 "[plan], [capture], [bench], [settle], [faults], [target], [rig], [database], "
-                "[telemetry]"},
+                "[telemetry], [[estimator]]"},
         BadCase{"wrong_type", "frames_per_position = 3", "frames_per_position = \"3\"",
                 "capture.frames_per_position = \"3\": expected an integer in 1..1000"},
         BadCase{"frames_zero", "frames_per_position = 3", "frames_per_position = 0",
@@ -506,8 +506,16 @@ INSTANTIATE_TEST_SUITE_P(
                 "target.layout = \"" + kConfig + "/targets/none.toml\": ", true},
         BadCase{"bad_pixel_format", "frames_per_position = 3",
                 "frames_per_position = 3\npixel_format = \"RGB8\"",
-                "capture.pixel_format = \"RGB8\": expected \"Mono8\", \"Mono10\", \"Mono12\" or "
-                "\"Mono16\""},
+                "capture.pixel_format = \"RGB8\": expected \"Mono8\", \"Mono10\", \"Mono12\", "
+                "\"Mono12Packed\", \"Mono16\" or \"BayerRG8\""},
+        BadCase{"packet_size_too_large", "frames_per_position = 3",
+                "frames_per_position = 3\npacket_size = 16000",
+                "capture.packet_size = 16000: expected a GigE Vision packet size in bytes, an "
+                "integer 576..9000 (1500 on a standard MTU; more needs jumbo frames)"},
+        BadCase{"negative_inter_packet_delay", "frames_per_position = 3",
+                "frames_per_position = 3\ninter_packet_delay_ns = -5",
+                "capture.inter_packet_delay_ns = -5: expected a GigE Vision inter-packet delay in "
+                "ns, 0..1e8"},
         BadCase{"missing_replay_folder", "camera = \"gige:127.0.0.1\"",
                 "camera = \"replay:frames\"",
                 "capture.camera = \"replay:frames\": {dir}/frames is not a folder; expected "
@@ -534,6 +542,68 @@ TEST(SweepConfigFile, AFolderOrAMissingFileIsRefusedAsTheSweepFile) {
 
 TEST(SweepConfigFile, ItsErrorsAreConfigErrors) {
   EXPECT_THROW(rig::sweep::load_sweep_config("/nonexistent/sweep.toml"), config::ConfigError);
+}
+
+}  // namespace
+
+namespace {
+
+TEST(SweepConfigEstimators, ShippedExternalSweepRunsTheExampleFromTheRepository) {
+  const SweepConfig c = rig::sweep::load_sweep_config(kConfig + "/sweeps/external.toml");
+  ASSERT_EQ(c.estimators.size(), 1u);
+  const rig::estimator::EstimatorSpec& e = c.estimators[0];
+  EXPECT_EQ(e.solver_name(), "ext:opencv_pnp");
+  EXPECT_EQ(e.command, (std::vector<std::string>{"../../examples/solvepnp_estimator.py"}));
+  EXPECT_EQ(e.working_dir, kConfig + "/sweeps");  // where the relative script path holds
+  EXPECT_EQ(e.timeout.count(), 2000);
+  EXPECT_EQ(e.startup_timeout.count(), 10000);
+  EXPECT_EQ(e.max_restarts, 3);
+  EXPECT_TRUE(e.send_corners);
+  EXPECT_EQ(c.to_json()["estimators"][0]["solver"], "ext:opencv_pnp");
+  // No [[estimator]]: none.
+  EXPECT_TRUE(rig::sweep::load_sweep_config(kConfig + "/sweeps/smoke.toml").estimators.empty());
+}
+
+TEST(SweepConfigEstimators, EveryKeyIsCheckedNamingFileKeyAndExpectation) {
+  const fs::path dir = temp_dir("estimators");
+  const std::string file = (dir / "sweep.toml").string();
+  const auto error_of = [&](const std::string& tables) {
+    return load_error(write_file(file, valid_sweep() + "\n" + tables));
+  };
+  const std::string ok = "[[estimator]]\nname = \"a\"\ncommand = [\"python3\"]\n";
+  EXPECT_EQ(error_of(ok), "");
+  EXPECT_EQ(error_of(ok + "[[estimator]]\nname = \"a\"\ncommand = [\"python3\"]\n"),
+            file +
+                ": estimator[1].name = \"a\": used twice; expected a name no other "
+                "[[estimator]] has");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a b\"\ncommand = [\"python3\"]\n"),
+            file +
+                ": estimator[0].name = \"a b\": expected a name of 1..64 characters A-Z a-z "
+                "0-9 _ . -");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\n"),
+            file +
+                ": estimator[0].command: missing; expected the command as an array of 1..256 "
+                "strings, program first");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\ncommand = \"python3 x.py\"\n"),
+            file +
+                ": estimator[0].command = \"python3 x.py\": expected the command as an array "
+                "of 1..256 strings, program first");
+  EXPECT_EQ(error_of("[[estimator]]\nname = \"a\"\ncommand = [\"no-such-estimator-program\"]\n"),
+            file +
+                ": estimator[0].command = [\"no-such-estimator-program\"]: "
+                "\"no-such-estimator-program\" is not an executable file on PATH; expected "
+                "the command as an array of 1..256 strings, program first");
+  EXPECT_NE(
+      error_of("[[estimator]]\nname = \"a\"\ncommand = [\"./missing.py\"]\n")
+          .find("\"./missing.py\" is not an executable file (relative to " + dir.string() + ")"),
+      std::string::npos);
+  EXPECT_EQ(error_of(ok + "timeout_ms = 0\n"),
+            file + ": estimator[0].timeout_ms = 0: expected an integer in 1..600000");
+  EXPECT_EQ(error_of(ok + "max_restarts = -1\n"),
+            file + ": estimator[0].max_restarts = -1: expected an integer in 0..1000");
+  EXPECT_NE(error_of(ok + "timout_ms = 5\n").find("estimator[0].timout_ms = 5: unknown key"),
+            std::string::npos);
+  EXPECT_NE(error_of("[estimator]\nname = \"a\"\n").find("estimator"), std::string::npos);
 }
 
 }  // namespace

@@ -138,7 +138,17 @@ TEST(Realism, UnknownKeysAndBadValuesAreRefusedNamingThem) {
             "target, sensor, optics, light, bench");
   EXPECT_NE(profile_error("[bench.x]\nbacklash = 1\n").find("bench.x.backlash = 1: unknown key"),
             std::string::npos);
-  EXPECT_NE(profile_error("[sensor]\nadc_bits = 12\n").find("sensor.adc_bits = 12: expected"),
+  EXPECT_NE(profile_error("[sensor]\nadc_bits = 17\n").find("sensor.adc_bits = 17: expected"),
+            std::string::npos);
+  EXPECT_NE(profile_error("[sensor]\nbayer = \"GB\"\n")
+                .find("sensor.bayer = \"GB\": expected \"RG\" (an RGGB mosaic"),
+            std::string::npos);
+  EXPECT_NE(profile_error("[sensor]\nfilter_response = [0.5, 1, 0.5]\n")
+                .find("sensor.filter_response = [0.5, 1, 0.5]: expected no filter_response "
+                      "without bayer = \"RG\""),
+            std::string::npos);
+  EXPECT_NE(profile_error("[sensor]\nbayer = \"RG\"\nfilter_response = [0.5, 1.5, 0.5]\n")
+                .find("expected [r, g, b], each in 0 .. 1"),
             std::string::npos);
   EXPECT_NE(profile_error("[camera_truth]\nfocal_sigma_rel = -0.5\n")
                 .find("camera_truth.focal_sigma_rel = -0.5: expected a number in 0 .. 0.1"),
@@ -147,6 +157,21 @@ TEST(Realism, UnknownKeysAndBadValuesAreRefusedNamingThem) {
                 .find("camera_truth.thin_prism"),
             std::string::npos);
   EXPECT_EQ(profile_error("name = \"ok\"\n"), "(accepted)");
+}
+
+// What goes on the wire: a 12-bit ADC and an RGGB colour filter array.
+TEST(Realism, AdcBitsAndColourFilterReachTheCamera) {
+  const auto path = std::filesystem::temp_directory_path() /
+                    ("rig_realism_colour_" + std::to_string(getpid()) + ".toml");
+  std::ofstream(path) << "name = \"colour\"\n[sensor]\nadc_bits = 12\nbayer = \"RG\"\n"
+                         "filter_response = [0.55, 1.0, 0.45]\n";
+  const sim::camera::RealismProfile p = sim::camera::load_realism_profile(path.string());
+  std::filesystem::remove(path);
+  EXPECT_EQ(p.scene.adc_bits, 12);
+  EXPECT_TRUE(p.bayer_rg);
+  EXPECT_EQ(p.filter_response, (std::array<double, 3>{0.55, 1.0, 0.45}));
+  EXPECT_FALSE(shipped("ideal").bayer_rg);
+  EXPECT_EQ(shipped("ideal").filter_response, (std::array<double, 3>{1.0, 1.0, 1.0}));
 }
 
 TEST(Realism, TheSameSeedDrawsTheSameTruthAndJsonHoldsIt) {

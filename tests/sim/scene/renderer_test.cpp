@@ -482,6 +482,37 @@ TEST(SceneRenderer, CoarseAdcQuantizesToItsLevels) {
   EXPECT_GT(levels, 5);
 }
 
+// A 12-bit ADC digitizes the same electrons and noise draws in 16 times
+// finer steps: 0 .. 4095 in CV_16UC1. Rescaled to 8 bits it is the 8-bit
+// render of the same seed within 1 DN (two roundings of the same signal:
+// round(round(16.06 dn) / 16.06) is within 0.5 + 0.03 DN of dn, the 8-bit
+// code within 0.5), and it takes more than 256 distinct values.
+TEST(SceneRenderer, TwelveBitAdcIsTheSameSignalInFinerSteps) {
+  SceneOptions o8, o12;
+  o12.adc_bits = 12;
+  const SceneRenderer r8(vision::Camera::paper_default(), vision::Target::paper_default(),
+                         codebook(), o8);
+  const SceneRenderer r12(vision::Camera::paper_default(), vision::Target::paper_default(),
+                          codebook(), o12);
+  const cv::Mat a = r8.render(pose(0.4, 10, 0, 0), 3).image;
+  const cv::Mat b = r12.render(pose(0.4, 10, 0, 0), 3).image;
+  ASSERT_EQ(a.type(), CV_8UC1);
+  ASSERT_EQ(b.type(), CV_16UC1);
+  cv::Mat b8;
+  b.convertTo(b8, CV_8U, 255.0 / 4095.0);
+  EXPECT_LE(cv::norm(a, b8, cv::NORM_INF), 1);
+  std::vector<bool> seen(4096, false);
+  int levels = 0;
+  for (int v = 0; v < b.rows; ++v)
+    for (int u = 0; u < b.cols; ++u) {
+      const int value = b.at<uint16_t>(v, u);
+      ASSERT_LE(value, 4095);
+      if (!seen[static_cast<size_t>(value)]) ++levels;
+      seen[static_cast<size_t>(value)] = true;
+    }
+  EXPECT_GT(levels, 256);
+}
+
 TEST(SceneRenderer, SameSeedGivesTheSameFrameAndAnotherSeedOtherNoise) {
   const SceneRenderer r(vision::Camera::paper_default(), vision::Target::paper_default(),
                         codebook());

@@ -54,7 +54,13 @@ class EndOfFrames : public CaptureError {
 // One whole frame. The image owns its pixels (copied out of the transport's
 // buffer), so a Frame outlives the source.
 struct Frame {
-  cv::Mat image;  // CV_8UC1 (Mono8) or CV_16UC1 (Mono10/12/16, LSB-aligned)
+  // CV_8UC1 (Mono8, BayerRG8 demosaiced to luminance, V4L2 GREY/YUYV/MJPG) or
+  // CV_16UC1 (Mono10/12/12Packed/16, V4L2 Y16), LSB-aligned: the conversions
+  // of vision/pixel_format.hpp.
+  cv::Mat image;
+  // Bits per pixel the camera measured (8, 10, 12 or 16): Mono10 fills
+  // 0 .. 1023 of a CV_16UC1 image.
+  int significant_bits = 8;
   // The device's frame counter (GigE block id: 16 bits on GigE Vision 1.x and
   // never 0; V4L2 sequence), or the index in a replay.
   uint64_t frame_id = 0;
@@ -63,6 +69,10 @@ struct Frame {
   uint64_t camera_timestamp_ns = 0;
   // When the host had the whole frame (wall clock).
   std::chrono::system_clock::time_point host_time{};
+  // The start of the exposure on the host's wall clock: camera_timestamp_ns
+  // mapped by the source's camera clock (GigE: vision/camera_clock.hpp, by
+  // latch or by arrival). Unset when the source cannot tell (V4L2, replay).
+  std::optional<std::chrono::system_clock::time_point> exposure_host_time;
   // Where it came from: the source spec, and for a replay the file path.
   std::string origin;
 };
@@ -120,8 +130,8 @@ struct CaptureOptions {
   // frame rate and grab() takes the next frame; cheaper latency, but a frame
   // may straddle a move.
   bool software_trigger = true;
-  // GenICam pixel format name. Mono8 is what the detector reads; Mono16 is
-  // delivered as CV_16UC1.
+  // GenICam pixel format name: Mono8, Mono10, Mono12, Mono12Packed, Mono16 or
+  // BayerRG8 (vision/pixel_format.hpp says how each becomes Frame::image).
   std::string pixel_format = "Mono8";
   // Region of interest in pixels; unset keeps the camera's current value.
   std::optional<int> width, height, offset_x, offset_y;
@@ -134,6 +144,18 @@ struct CaptureOptions {
   // frame or a timeout before it throws. More retries ride out a flaky link
   // at the cost of a longer worst-case grab.
   int retries = 2;
+  // GigE: stream packet size in bytes (GenICam GevSCPSPacketSize: the UDP
+  // payload of one GVSP packet plus its 36 bytes of IP, UDP and GVSP
+  // headers); unset keeps the camera's value. 576 .. 9000: up to 1500 on a
+  // standard Ethernet MTU, larger only with jumbo frames on every hop. Larger
+  // packets mean fewer packets (and interrupts) per frame.
+  std::optional<int> packet_size_bytes;
+  // GigE: inter-packet delay (GevSCPD) in ns, 0 .. 1e8; unset keeps the
+  // camera's value. Converted by Aravis to the camera's timestamp ticks.
+  // Paces a camera that floods a slow link or a switch shared by several
+  // cameras; each packet then takes this much longer, so a frame of P packets
+  // takes about P x delay longer.
+  std::optional<double> inter_packet_delay_ns;
   // GigE: receive socket buffer, bytes, fixed (not Aravis's automatic size,
   // which follows the payload). A few MB holds several frames, so frames are
   // not lost while the receiving thread is descheduled by a busy core; the

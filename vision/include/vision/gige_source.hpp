@@ -23,6 +23,7 @@
 #include <memory>
 #include <string>
 
+#include "vision/camera_clock.hpp"
 #include "vision/frame_source.hpp"
 
 namespace vision {
@@ -53,6 +54,10 @@ class GigeSource final : public FrameSource {
   // After open(): whether the receiving thread got real-time scheduling
   // (CaptureOptions::realtime_receiver).
   bool realtime_receiver() const;
+  // How camera timestamps map to host time (vision/camera_clock.hpp): a latch
+  // at open() when the camera has GevTimestampControlLatch, else the frames'
+  // arrivals. Frame::exposure_host_time is camera_timestamp_ns mapped by it.
+  const CameraClock& camera_clock() const { return clock_; }
 
  private:
   struct Impl;
@@ -60,6 +65,7 @@ class GigeSource final : public FrameSource {
   CaptureOptions options_;
   CaptureCounters counters_;
   CameraIdentity identity_;
+  CameraClock clock_;
   std::unique_ptr<Impl> impl_;
 };
 

@@ -8,8 +8,10 @@
 // whose timestamps are not CLOCK_MONOTONIC cannot be compared: the next frame
 // is taken.
 //
-// Pixel formats: GREY (8 bit), Y16 (16 bit), and YUYV, of which the luma is
-// kept; the device is asked for GREY and its answer decides.
+// Pixel formats: GREY (8 bit), Y16 (16 bit), YUYV (its luma is kept) and MJPG
+// (decoded to grey); the device is asked for GREY and its answer decides. The
+// conversion is vision::v4l2_buffer_to_image (vision/pixel_format.hpp),
+// tested on buffers; the ioctl path itself needs a device (none in CI).
 #pragma once
 
 #include <cstdint>

@@ -154,6 +154,9 @@ class Table {
   // An array of min_count..max_count finite numbers.
   std::vector<double> numbers(const std::string& key, std::size_t min_count, std::size_t max_count,
                               const std::string& expected);
+  // An array of min_count..max_count strings (a command's argv).
+  std::vector<std::string> strings(const std::string& key, std::size_t min_count,
+                                   std::size_t max_count, const std::string& expected);
   // A non-empty path naming an existing regular file, resolved against the
   // file's folder; `what` says what it is ("a drive profile").
   std::string existing_file(const std::string& key, const std::string& what);

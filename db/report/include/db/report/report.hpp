@@ -27,6 +27,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <optional>
 #include <stdexcept>
@@ -48,6 +49,34 @@ namespace db::report {
 class ReportInputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+// The truth of a run's positions recomputed by the caller under another rig
+// geometry and camera calibration than the sweep used (`rig report
+// --geometry FILE [--calibration FILE]`): the bench read-backs are stored, so
+// the true distance, viewing angle, markers in view and Cramér-Rao bounds
+// follow from them without sweeping again. db::report does no geometry
+// itself: rig (rig/cli) computes these and hands them over.
+struct TruthFile {
+  std::string role;    // "rig geometry", "camera calibration"
+  std::string path;    // as given
+  std::string sha256;  // 64 lowercase hex characters of the file's bytes
+};
+
+// One position's recomputed truth; fields as in store::PositionRecord (metres,
+// degrees, metres per pixel, pixels), absent or empty when not known.
+struct PositionTruth {
+  std::optional<double> true_distance_m;
+  std::optional<double> true_viewing_angle_deg;
+  std::vector<store::DistanceBound> distance_bounds;
+  std::vector<store::VisibleMarker> visible_markers;
+};
+
+struct RecomputedTruth {
+  std::vector<TruthFile> files;  // what the truth was computed from, named in the header
+  // By plan index. Replaces the stored truth of every position of the run: a
+  // measured position missing here (e.g. no read-back) has no known truth.
+  std::map<std::int64_t, PositionTruth> positions;
 };
 
 struct ReportOptions {
@@ -95,6 +124,13 @@ struct ReportOptions {
   // 1280 px camera gives a 0.1 m target (~10 um), so only solvers that
   // compute the same pose (the same algorithm in two libraries) coincide.
   double coincidence_m = 1e-7;
+  // Empty: the truth the sweep stored (its own rig geometry and calibration).
+  // Set: called once with the reported run and its measured positions (as
+  // stored, without frames, by plan index); what it returns replaces their
+  // truth (the baseline keeps its own). Its exceptions propagate.
+  std::function<RecomputedTruth(const store::Run& run,
+                                const std::vector<store::PositionRecord>& positions)>
+      recompute_truth;
 };
 
 // One of the ten distance classes of one solver and scope.
@@ -257,6 +293,9 @@ struct RunStudy {
   std::vector<StageStudy> stages;
   std::vector<store::RunEvent> events;
   ReportOptions options;
+  // Set when options.recompute_truth replaced the stored truth: what it
+  // returned (the files it names are in the run header and report.json).
+  std::optional<RecomputedTruth> truth;
 
   // The solvers that coincide with `s` (whose coincides_with is s.solver),
   // in order.

@@ -14,11 +14,14 @@
 //   - the target orientation in the bench frame, R_bench_target =
 //     R_nominal * Rot(tilt);
 //   - the camera-to-target offset at bench zero, d = t_bench_target -
-//     t_carriage_cam (bench axes, metres in the API, mm in files).
+//     t_carriage_cam (bench axes, metres in the API, mm in files);
+//   - the sheet's print scale error s: printers and paper scale a print by
+//     0.1-0.5 %, and the bench's read-backs are a length standard the layout
+//     is not, so the sheet as printed is (1 + s) times its layout (fixable).
 // Knowns: the bench read-backs (positions.measured_x_mm / measured_y_mm) and
-// the target layout. A corner P (target frame) seen with the carriage at
-// (x, y) mm projects through the camera model from
-//   p_cam = R_bench_cam^T (R_bench_target P + d - (x, y, 0) / 1000).
+// the target layout. A corner P (target frame, as laid out) seen with the
+// carriage at (x, y) mm projects through the camera model from
+//   p_cam = R_bench_cam^T (R_bench_target (1 + s) P + d - (x, y, 0) / 1000).
 // With translation-only motion the camera's offset on the carriage and the
 // target's origin enter only through their difference d: the output keeps the
 // camera offset of the nominal rig geometry and puts the target origin at
@@ -95,7 +98,7 @@ struct CalibrationProblem {
 CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64_t> run_id);
 
 // The parameters, in this order (names as in calibration.json).
-constexpr int kParameterCount = 18;
+constexpr int kParameterCount = 19;
 constexpr int kIntrinsicCount = 9;  // the first nine: fx fy cx cy k1 k2 p1 p2 k3
 extern const std::array<const char*, kParameterCount> kParameterNames;
 extern const std::array<const char*, kParameterCount> kParameterUnits;
@@ -103,7 +106,8 @@ extern const std::array<const char*, kParameterCount> kParameterUnits;
 int parameter_index(const std::string& name);
 
 struct CalibrationOptions {
-  // Intrinsic parameters held at their nominal values, by name ("k3").
+  // Parameters held at their nominal values, by name: an intrinsic ("k3") or
+  // "target_scale_error" (held at 0: the sheet is exactly its layout).
   std::vector<std::string> fixed;
   double huber_px = 1.0;  // robust loss scale, px of corner error
   int threads = 2;        // Ceres threads
@@ -125,6 +129,10 @@ struct ParameterEstimate {
 struct CalibrationResult {
   vision::Camera camera = vision::Camera::paper_default();
   vision::RigGeometry geometry;  // camera offset: nominal; target origin: offset + d
+  // The calibration sheet as printed is (1 + this) times its layout
+  // (parameter "target_scale_error"); a property of that print, not of the
+  // camera or the rig: calibration.json reports it, no output file carries it.
+  double target_scale_error = 0;
   std::array<ParameterEstimate, kParameterCount> parameters;
   // Correlations of the free parameters (kParameterCount x kParameterCount;
   // rows and columns of fixed parameters are 0, their diagonal 1).
@@ -152,10 +160,12 @@ void check_observable(const CalibrationProblem& problem);
 CalibrationResult calibrate(const CalibrationProblem& problem, const CalibrationOptions& options);
 
 // RMS corner error |r| in px of the observations at the given plan indices
-// (all when empty) predicted from bench read-backs through camera and geometry.
+// (all when empty) predicted from bench read-backs through camera and
+// geometry, the sheet printed at (1 + target_scale_error) times its layout.
 double reprojection_rms_px(const CalibrationProblem& problem, const vision::Camera& camera,
                            const vision::RigGeometry& geometry,
-                           const std::vector<std::int64_t>& plan_indices = {});
+                           const std::vector<std::int64_t>& plan_indices = {},
+                           double target_scale_error = 0);
 
 // Calibrates on the even plan indices and predicts the odd ones.
 struct HeldOutCheck {

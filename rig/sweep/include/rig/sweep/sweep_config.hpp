@@ -18,9 +18,12 @@
 //   calibration = ""            (required) calibration file; "" = the paper's Sony XC-555
 //   frames_per_position = 3     1..1000 (default 3); N > 1 separates jitter from bias
 //   software_trigger = true     default true (one exposure per trigger, after settling)
-//   pixel_format = "Mono8"      Mono8 | Mono10 | Mono12 | Mono16 (default Mono8)
+//   pixel_format = "Mono8"      Mono8 | Mono10 | Mono12 | Mono12Packed | Mono16 | BayerRG8
+//                               (default Mono8; vision/pixel_format.hpp: the conversions)
 //   exposure_us = 10000         > 0; absent keeps the camera's value
 //   gain = 0                    >= 0, camera units (dB); absent keeps the camera's value
+//   packet_size = 1500          GigE GevSCPSPacketSize, bytes, 576..9000; absent keeps the camera's
+//   inter_packet_delay_ns = 0   GigE GevSCPD, ns, 0..1e8; absent keeps the camera's
 //   grab_timeout_ms = 2000      > 0 (default 2000): wait for one frame
 //   retries = 2                 0..100 (default 2): re-triggers after a timeout or an
 //                               incomplete frame before the position is marked failed
@@ -59,6 +62,17 @@
 //   control = "tcp://127.0.0.1:5557"      REP endpoint (default as shown), != publish
 //   allow_remote = false        false: endpoints must be loopback (127.x, localhost)
 //
+//   [[estimator]]               zero or more external estimators (docs/external-estimators.md)
+//   name = "my_pnp"             (required) [A-Za-z0-9_.-], 1..64 characters, unique;
+//                               stored and reported as solver "ext:my_pnp"
+//   command = ["python3", "x.py"]  (required) argv, 1..256 strings, no shell; run in
+//                               the sweep file's folder; argv[0] a program on PATH
+//                               or a path (relative to the sweep file's folder)
+//   timeout_ms = 2000           1..600000 (default 2000): per frame, request to answer
+//   startup_timeout_ms = 10000  1..600000 (default 10000): start to handshake
+//   max_restarts = 3            0..1000 (default 3): restarts per sweep after failures
+//   send_corners = true         send rig's detected corners with each frame (default true)
+//
 // Consistency checks: every plan position inside the profile's soft limits;
 // the speed at most the profile's max; the target in front of the camera
 // (z_cam > 0) at every position; the settle timeout longer than the plan's
@@ -71,10 +85,12 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "config/error.hpp"
 #include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
+#include "rig/estimator/external_estimator.hpp"
 #include "rig/sweep/sweep_plan.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "vision/camera.hpp"
@@ -179,6 +195,9 @@ struct SweepConfig {
   // position being measured; false is faster on slow disks but may lose the
   // last positions (the run then resumes from an earlier one).
   bool durable_commits = true;
+  // [[estimator]]: external estimators run on every frame beside the
+  // built-in solvers, in file order (docs/external-estimators.md).
+  std::vector<estimator::EstimatorSpec> estimators;
 
   // The calibration as a message names it: its path, or the built-in paper
   // camera when capture.calibration is "".
@@ -190,6 +209,8 @@ struct SweepConfig {
   // Every resolved value (absolute paths, defaults filled in, the plan's
   // description and size but not its positions), for runs.config_json.
   nlohmann::json to_json() const;
+  // The [[estimator]] specs as to_json() stores them under "estimators".
+  nlohmann::json estimators_json() const;
 };
 
 // Reads, resolves and validates a sweep file (format above; a regular file of

@@ -15,8 +15,9 @@
 //   trigger_poll_hz = 1000            # see sim::camera::CameraServerOptions
 //   nominal_exposure_us = 10000
 //   seed = 1
-//   [realism]
-//   profile = "realism/lab.toml"      # sim/camera/realism.hpp; absent: the ideal world
+//   genicam = "sfnc"                  # feature names: "sfnc" (ExposureTime) | "legacy"
+//   (ExposureTimeAbs) [realism] profile = "realism/lab.toml"      # sim/camera/realism.hpp; absent:
+//   the ideal world
 // Every path must name an existing file; a key or table not listed is refused.
 #pragma once
 

@@ -34,7 +34,10 @@
 //   [optics]  blur_sigma_px, vignetting, f_number, focus_distance_m,
 //             pixel_pitch_um (SceneOptions::pixel_pitch_m in micrometres)
 //   [sensor]  exposure, full_well_electrons, read_noise_electrons, adc_bits, noise,
-//             dark_current_e_per_s, prnu_rel, dsnu_electrons, fixed_pattern_seed
+//             dark_current_e_per_s, prnu_rel, dsnu_electrons, fixed_pattern_seed,
+//             bayer = "RG", filter_response = [r, g, b]
+//             (adc_bits 1 .. 16: above 8 the camera's Mono10/Mono12/Mono16 carry
+//             every bit; bayer, filter_response: RealismProfile below)
 //   [bench.x], [bench.y]  backlash_mm, repeatability_mm, encoder_scale_ppm,
 //             thermal_drift_um_per_min, vibration_amplitude_mm,
 //             vibration_frequency_hz, vibration_decay_s
@@ -95,6 +98,11 @@ struct RealismProfile {
   // Rendering: light, optics, sensor, and the thin-prism terms of the true lens.
   scene::SceneOptions scene;
   AxisRealism bench_x, bench_y;
+  // A colour sensor ([sensor] bayer = "RG"): the camera starts in BayerRG8
+  // and its R, G, B pixels carry filter_response times the grey level
+  // (sim::camera::CameraServerOptions). Mono (false) by default.
+  bool bayer_rg = false;
+  std::array<double, 3> filter_response{1.0, 1.0, 1.0};
 };
 
 // Replaces the bench's [sim.x] / [sim.y] imperfections by the profile's.

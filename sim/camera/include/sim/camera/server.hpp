@@ -12,13 +12,28 @@
 // "rig-rig-sim-<serial>" (vendor "rig", model "rig-sim", device version
 // "realism <profile>") at the interface address.
 //
+// Its GenICam XML is rig's own (sim/camera/genicam/): CameraServerOptions::
+// genicam chooses the SFNC 2.x names (ExposureTime, Gain) or the older ones
+// (ExposureTimeAbs, GainRaw); both drive the same registers.
+//
 // Honoured features: Width, Height, OffsetX, OffsetY (a region of the
-// renderer's image; the sensor size is the camera model's), PixelFormat (Mono8
-// exactly as rendered; Mono16 as DN * 257; RGB8 and the 8-bit Bayer formats
-// carry the grey image), ExposureTimeAbs (exposure duration, blur window,
-// electrons collected relative to nominal_exposure_us, dark signal), GainRaw
-// (dB, amplifies signal and noise after the well: scene::SensorExposure),
-// TriggerMode/TriggerSource=Software/TriggerSoftware, and the free run frame rate.
+// renderer's image; the sensor size is the camera model's), PixelFormat
+// (below), ExposureTime or ExposureTimeAbs (exposure duration, blur window,
+// electrons collected relative to nominal_exposure_us, dark signal), Gain or
+// GainRaw (whole dB, amplifies signal and noise after the well:
+// scene::SensorExposure), TriggerMode/TriggerSource=Software/TriggerSoftware,
+// AcquisitionStart/Stop, the free run frame rate, GevSCPSPacketSize.
+//
+// Pixel formats. The renderer's codes (0 .. 255 for an ADC of up to 8 bits,
+// 0 .. 2^adc_bits - 1 above: scene::SceneOptions::adc_bits) go on the wire
+// full scale onto full scale: value = round(code (2^wire - 1) / (2^adc - 1)),
+// exactly the code when the depths agree. Mono8 (an 8-bit sensor's image
+// exactly as rendered; a 12-bit sensor's codes rounded to 8 bits), Mono10,
+// Mono12, Mono16 (little-endian 16-bit words), Mono12Packed (GigE Vision's
+// packing, vision/pixel_format.hpp), BayerRG8: an RGGB mosaic from the
+// buffer's first pixel, each pixel the 8-bit value times its filter's
+// filter_response (the grey scene seen through a colour filter array; the
+// response scales the digitized value, noise included).
 //
 // Threads: the fill callback runs on Aravis's camera thread, under Aravis's
 // fill mutex; the position callback is called there and must be thread-safe
@@ -26,6 +41,7 @@
 // GVCP port (3956) of an address: one CameraServer per address at a time.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -68,6 +84,15 @@ struct CameraServerOptions {
   std::string vendor_name = "rig";
   std::string model_name = "rig-sim";
   std::string device_version = "realism ideal";
+  // GenICam feature names: "sfnc" (ExposureTime, Gain) or "legacy"
+  // (ExposureTimeAbs, GainRaw).
+  std::string genicam = "sfnc";
+  // A colour sensor: BayerRG8 is the camera's PixelFormat at start (a client
+  // may still ask for a Mono format: the grey codes). filter_response: the
+  // fraction of the grey level that the R, G and B filters pass (0 .. 1 each),
+  // used by BayerRG8 whatever bayer_rg says.
+  bool bayer_rg = false;
+  std::array<double, 3> filter_response{1.0, 1.0, 1.0};
 };
 
 class CameraServer {

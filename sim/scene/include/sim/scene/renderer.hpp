@@ -126,8 +126,10 @@ struct SceneOptions {
   double full_well_electrons = 20000.0;
   // Read (plus dark and ADC) noise, electrons RMS, added in quadrature.
   double read_noise_electrons = 20.0;
-  // Bits of the analog-to-digital converter (1 .. 8). The image is always
+  // Bits of the analog-to-digital converter (1 .. 16). Up to 8 the image is
   // CV_8UC1 (0 .. 255 = 0 .. full well); fewer bits quantize it more coarsely.
+  // Above 8 it is CV_16UC1, 0 .. 2^adc_bits - 1 = 0 .. full well (a 12-bit
+  // sensor: 0 .. 4095), the same electrons and noise in finer steps.
   int adc_bits = 8;
   // false: no shot or read noise (deterministic, for geometry tests).
   bool noise = true;
@@ -201,7 +203,9 @@ struct MarkerTruth {
 };
 
 struct RenderedFrame {
-  cv::Mat image;  // CV_8UC1, camera.width_px() x camera.height_px()
+  // camera.width_px() x camera.height_px(): CV_8UC1, or CV_16UC1 when
+  // SceneOptions::adc_bits > 8.
+  cv::Mat image;
   // One entry per marker of the target whose centre is in front of the camera,
   // in the target's marker order; empty when show_target is false or when the
   // camera sees the back of the sheet (then drawn blank).
