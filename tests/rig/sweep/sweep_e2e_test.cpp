@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <zmq.hpp>
 
 #include "db/store/store.hpp"
 #include "motion/bench_url.hpp"
@@ -599,6 +600,38 @@ TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPau
   EXPECT_EQ(types.back(), "run_stop");
   EXPECT_EQ(positions, (std::vector<long long>{0, 1, 2, 3, 4, 5}));
   EXPECT_NE(std::find(types.begin(), types.end(), "state"), types.end());  // paused, running
+}
+
+// A control request nested 20,000 deep sent to a running sweep: before the
+// bounded parser its reply's dump recursed once per level and the stack
+// overflow ended the sweep. It is refused by name, the sweep keeps answering
+// and completes every position.
+TEST(SweepTelemetry, ADeeplyNestedControlRequestIsRefusedAndTheSweepCompletes) {
+  SimRig rig;
+  const std::string sweep = rig.write_sweep(SweepFileOptions{});
+  auto child = start_sweep({sweep});
+  const SweepEndpoints endpoints = wait_for_endpoints(*child, 60s);
+  ASSERT_FALSE(endpoints.control.empty()) << "the sweep did not announce its endpoints";
+  constexpr int kDepth = 20000;
+  const std::string request =
+      "{\"command\": " + std::string(kDepth, '[') + std::string(kDepth, ']') + "}";
+  zmq::context_t context;
+  zmq::socket_t socket(context, zmq::socket_type::req);
+  socket.set(zmq::sockopt::linger, 0);
+  socket.set(zmq::sockopt::rcvtimeo, static_cast<int>(kControlWait.count()));
+  socket.connect(endpoints.control);
+  socket.send(zmq::buffer(request), zmq::send_flags::none);
+  zmq::message_t reply;
+  ASSERT_TRUE(socket.recv(reply)) << "no reply: the sweep's control server died";
+  EXPECT_NE(reply.to_string().find("nests arrays or objects more than 8 levels deep"),
+            std::string::npos)
+      << reply.to_string();
+  const auto status = rig::telemetry::send_control(endpoints.control, "status", kControlWait);
+  EXPECT_TRUE(status.value("ok", false)) << status.dump();
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
 }
 
 }  // namespace
