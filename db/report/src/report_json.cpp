@@ -261,7 +261,9 @@ std::string render_json(const Document& document, const ReportInput& in) {
   root["header"] = header;
   root["figures"] = figures;
   root["tables"] = tables;
-  return root.dump(1);
+  // A damaged database's text may hold bytes that are not UTF-8: written as
+  // U+FFFD, the report is still valid JSON (nlohmann's default throws).
+  return root.dump(1, ' ', false, json::error_handler_t::replace);
 }
 
 }  // namespace db::report

@@ -178,4 +178,28 @@ TEST_F(HostileInput, ReportNamesTheDatabaseOfAValueBeyondAnyPhysicalRange) {
   EXPECT_NE(r.err.find("expected a database written by rig sweep"), std::string::npos) << r.err;
 }
 
+// Text that is not UTF-8 (a damaged database; found by the mutation test):
+// nlohmann's dump threw, and rig report ended with exit 1 naming nothing.
+// The report is written, its JSON valid, the bytes replaced by U+FFFD.
+TEST_F(HostileInput, ReportOfADatabaseHoldingBytesThatAreNotUtf8IsValidJson) {
+  const std::string db = (dir_ / "run.db").string();
+  rig_test::SyntheticRunSpec spec;
+  spec.seed = 7;
+  spec.positions = 8;
+  spec.solvers = rig_test::paper_like_solvers();
+  rig_test::write_synthetic_run(db, spec);
+  sqlite3* connection = nullptr;
+  ASSERT_EQ(sqlite3_open(db.c_str(), &connection), SQLITE_OK);
+  ASSERT_EQ(sqlite3_exec(connection, "UPDATE runs SET host = CAST(X'6C6162B7' AS TEXT)", nullptr,
+                         nullptr, nullptr),
+            SQLITE_OK);
+  sqlite3_close(connection);
+  const RigRun r = run_rig("report " + db + " --out " + (dir_ / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir_ / "out" / "report.json");
+  const nlohmann::json report = nlohmann::json::parse(in, nullptr, false);
+  ASSERT_FALSE(report.is_discarded());
+  EXPECT_NE(report.dump().find("lab\xEF\xBF\xBD"), std::string::npos);
+}
+
 }  // namespace
