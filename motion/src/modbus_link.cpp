@@ -25,6 +25,11 @@ ModbusLink::ModbusLink(const BenchUrl& url, int unit_id, std::chrono::millisecon
   const auto us = std::chrono::duration_cast<std::chrono::microseconds>(timeout).count();
   modbus_set_response_timeout(ctx_, static_cast<uint32_t>(us / 1000000),
                               static_cast<uint32_t>(us % 1000000));
+  // The same bound on a gap inside a reply: libmodbus's own (500 ms) let a
+  // drive that sent part of a frame hold every request for half a second,
+  // whatever link.response_timeout_ms said.
+  modbus_set_byte_timeout(ctx_, static_cast<uint32_t>(us / 1000000),
+                          static_cast<uint32_t>(us % 1000000));
   // No libmodbus error recovery: a reconnect must be followed by a state
   // re-read, which only ModbusBench can do.
   modbus_set_error_recovery(ctx_, MODBUS_ERROR_RECOVERY_NONE);

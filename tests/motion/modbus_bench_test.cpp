@@ -1,7 +1,11 @@
 // ModbusBench against the simulated bench (a real libmodbus server on an
 // ephemeral loopback port): moves, settling, soft limits, alarms, stop,
 // timeouts, write verification and the reconnect watchdog.
+#include <arpa/inet.h>
 #include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -300,6 +304,45 @@ TEST_F(ModbusBench, ConnectingToNothingRaisesLinkError) {
   server_.reset();
   profile_.timing.reconnect_timeout_ms = 100;
   EXPECT_THROW(motion::ModbusBench(motion::BenchUrl::parse(url), profile_), motion::BenchLinkError);
+}
+
+// A drive that answers the first request with the start of a frame (its
+// MBAP header and function code) and then nothing, the connection left open:
+// the request fails within link.response_timeout_ms (50 ms here), not after
+// libmodbus's own 500 ms gap bound, which no profile key reached (found by
+// the modbus_reply fuzz target running 2 inputs a second). A timeout cannot
+// fire early, so without the fix the failure takes at least 500 ms; with it
+// about 50 ms, and 450 ms of slack are left for a loaded host.
+TEST(ModbusLinkTimeouts, AReplyThatStopsHalfwayFailsWithinTheResponseTimeout) {
+  const int listener = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  socklen_t size = sizeof address;
+  ASSERT_EQ(::bind(listener, reinterpret_cast<sockaddr*>(&address), size), 0);
+  ASSERT_EQ(::listen(listener, 1), 0);
+  ASSERT_EQ(::getsockname(listener, reinterpret_cast<sockaddr*>(&address), &size), 0);
+  std::thread peer([listener] {
+    const int fd = ::accept(listener, nullptr, nullptr);
+    unsigned char request[260];
+    if (fd >= 0 && ::read(fd, request, sizeof request) >= 8) {
+      const unsigned char partial[] = {request[0], request[1], 0, 0, 0, 21, request[6], request[7]};
+      (void)::write(fd, partial, sizeof partial);
+      std::this_thread::sleep_for(1500ms);
+    }
+    if (fd >= 0) ::close(fd);
+  });
+  motion::DriveProfile profile = rig_test::test_profile();
+  profile.timing.response_timeout_ms = 50;
+  profile.timing.reconnect_timeout_ms = 0;
+  const auto url =
+      motion::BenchUrl::parse("modbus-tcp://127.0.0.1:" + std::to_string(ntohs(address.sin_port)));
+  const auto t0 = Clock::now();
+  EXPECT_THROW(motion::ModbusBench(url, profile), motion::BenchLinkError);
+  const double s = std::chrono::duration<double>(Clock::now() - t0).count();
+  EXPECT_LT(s, 0.5);
+  peer.join();
+  ::close(listener);
 }
 
 }  // namespace

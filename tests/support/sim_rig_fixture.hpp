@@ -40,6 +40,7 @@ struct SweepFileOptions {
   int max_consecutive_failed = 5;
   std::string calibration;  // "" = the paper camera
   std::string extra_capture;
+  std::string extra_faults;  // more [faults] keys, one "key = value\n" each
   // Telemetry endpoints. Ports chosen at bind time by default, so that no
   // test needs a fixed port to be free; the sweep prints the ports on its
   // first line. Two loopback addresses: the sweep refuses two identical
@@ -95,8 +96,8 @@ class SimRig {
         << o.extra_capture << "\n[bench]\nurl = \"modbus-tcp://127.0.0.1:" << bench_->port()
         << "\"\nprofile = \"" << repo_path("config/benches/sim.toml")
         << "\"\nspeed_mm_s = 100\n\n[faults]\non_alarm = \"" << o.on_alarm
-        << "\"\nmax_consecutive_failed = " << o.max_consecutive_failed
-        << "\n\n[target]\nlayout = \"" << repo_path("config/targets/paper.toml")
+        << "\"\nmax_consecutive_failed = " << o.max_consecutive_failed << "\n"
+        << o.extra_faults << "\n[target]\nlayout = \"" << repo_path("config/targets/paper.toml")
         << "\"\n\n[rig]\nfile = \"" << repo_path("config/rigs/sim.toml")
         << "\"\n\n[database]\npath = \"" << database()
         << "\"\ndurable_commits = true\n\n[telemetry]\npublish = \"" << o.telemetry_publish

@@ -9,6 +9,9 @@
 #include <fstream>
 #include <opencv2/calib3d.hpp>
 #include <random>
+#include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -199,6 +202,86 @@ TEST_F(CalibrationFiles, HugeDeclaredMatrixIsRefusedBeforeOpenCvAllocatesIt) {
         "   data: [ 706.1, 0, 388.0, 0, 731.1, 269.6, 0, 0, 1 ]\n");
   expect_error(path("huge.yaml"), "key 'camera_matrix'");
   expect_error(path("huge.yaml"), "declares rows x cols = 100000x100000; expected 1 to 16");
+}
+
+// The input libFuzzer found (scripts/fuzz calibration): a line that is not
+// KEY: VALUE inside an !!opencv-matrix block. OpenCV 4.6's YAML reader throws
+// std::length_error on it (not a cv::Exception), which ended the process;
+// rig's own reader of the calibration subset refuses it, naming the line.
+const char* const kMatrixWithAStrayLine =
+    "%YAML:1.0\n---\nimage_width: 736\nimage_height: 571\ncamera_matrix: !!opencv-matrix\n"
+    "   rows: 3\n   cols: 3\n   dt: d\n   :d td\n"
+    "   data: [ 706.1, 0., 388.0, 0., 731.1, 269.6, 0., 0., 1. ]\n";
+
+TEST_F(CalibrationFiles, AStrayLineInAnOpenCvMatrixIsRefusedNamingTheLine) {
+  write("stray.yaml", kMatrixWithAStrayLine);
+  expect_error(path("stray.yaml"), "line 9: ':d td' is not KEY: VALUE; expected KEY: VALUE");
+}
+
+// The same bytes named .xml (the fuzz target's other half): OpenCV picks its
+// parser by the first bytes, so this reached the same YAML parser. The
+// format is what the file holds: it is read, and refused, as YAML.
+TEST_F(CalibrationFiles, YamlNamedXmlIsReadAsYaml) {
+  write("stray.xml", kMatrixWithAStrayLine);
+  expect_error(path("stray.xml"), "line 9: ':d td' is not KEY: VALUE");
+  write("good.xml",
+        "image_width: 640\nimage_height: 480\ncamera_matrix:\n  rows: 3\n  cols: 3\n  data: [600, "
+        "0, 320, 0, 600, 240, 0, 0, 1]\ndistortion_coefficients: [0, 0, 0, 0]\n");
+  EXPECT_EQ(vision::Camera::load(path("good.xml")).width_px(), 640);
+}
+
+// Only the YAML that calibrations use is read; anything else is refused
+// with the line and what was expected, never handed to a general parser.
+TEST_F(CalibrationFiles, YamlOutsideTheCalibrationSubsetIsRefusedNamingTheLine) {
+  const std::string head = "image_width: 640\nimage_height: 480\n";
+  const std::string matrix = "camera_matrix: !!opencv-matrix\n  rows: 3\n  cols: 3\n  dt: d\n";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {head + "camera_matrix:\n\trows: 3\n", "line 4: a tab in the indentation"},
+      {head + "camera_matrix:\n  - 1\n  - 2\n", "line 4: a block sequence item '- 1'"},
+      {head + "camera_matrix: {rows: 3, cols: 3}\n", "line 3: a flow mapping"},
+      {head + "camera_matrix: &m [1, 2]\n", "line 3: '&' (an anchor"},
+      {head + "camera_matrix: !!binary abc\n", "line 3: the tag '!!binary'"},
+      {head + "image_width: 641\n", "line 3: key 'image_width' given twice"},
+      {head + matrix + "  data: [1, 0, 0,\n    0, 1, 0\n",
+       "line 7: a sequence '[' with no closing"},
+      {head + matrix + "  data: [1, [0], 0]\n", "line 7: a collection inside a sequence"},
+      {head + matrix + "  data: [1, , 0]\n", "line 7: an empty item"},
+      {head + matrix + "   data: [1]\n", "line 7: indented 3 columns in a block indented 2"},
+      {head + "a:\n b:\n  c:\n   d:\n    e:\n     f:\n      g:\n       h:\n        i: 1\n",
+       "line 11: blocks nested more than 8 levels deep"},
+      {head + "---\nimage_width: 1\n", "line 3: a second YAML document"},
+      {head + "camera_name: \"narrow\n", "line 3: a quoted string not closed on its line"},
+      {"%YAML:2.0\n" + head, "line 1: the directive '%YAML:2.0'"},
+      {"  " + head, "line 1: the first key is indented"},
+      {"# only a comment\n", "line 2: no KEY: VALUE line"},
+      {head + "camera_matrix: a: b\n", "line 3: a second ':' in 'a: b'"},
+  };
+  for (const auto& [text, words] : cases) {
+    write("subset.yaml", text);
+    SCOPED_TRACE(text);
+    expect_error(path("subset.yaml"), words);
+  }
+}
+
+// What OpenCV and ROS tools write beyond the four keys (comments, quoted
+// strings, a sequence over several lines, dt f) still reads.
+TEST_F(CalibrationFiles, ReadsCommentsQuotedTextMultiLineDataAndFloatMatrices) {
+  write(
+      "full.yaml",
+      "%YAML:1.0\n---\n# calibrated 2026-11-22\ncalibration_time: \"Sun 22 Nov # not a comment\"\n"
+      "camera_name: 'it''s the bench camera'\nimage_width: 736   # px\nimage_height: 571\n"
+      "camera_matrix: !!opencv-matrix\n   rows: 3\n   cols: 3\n   dt: f\n"
+      "   data: [ 7.0610000000000002e+02, 0., 388.,   # fx, skew, cx\n"
+      "       0., 7.3110000000000002e+02, 2.6960000000000002e+02,\n       0., 0., 1. ]\n"
+      "distortion_coefficients: !!opencv-matrix\n   rows: 5\n   cols: 1\n   dt: d\n"
+      "   data: [ -2.2789999999999999e-01, 1.4790000000000000e-01,\n"
+      "       -7.9849999999999995e-04, 6.2449999999999995e-04, 0. ]\n"
+      "avg_reprojection_error: 2.0999999999999999e-01\n");
+  const auto cam = vision::Camera::load(path("full.yaml"));
+  EXPECT_EQ(cam.width_px(), 736);
+  // dt f: the values OpenCV would hold, rounded to float.
+  EXPECT_EQ(cam.intrinsics().fy, static_cast<double>(731.1f));
+  EXPECT_DOUBLE_EQ(cam.distortion().p2, 0.0006245);
 }
 
 TEST_F(CalibrationFiles, MissingKeyNamesTheKey) {

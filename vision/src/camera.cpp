@@ -5,8 +5,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/core/persistence.hpp>
 #include <sstream>
+#include <tuple>
+
+#include "calibration_yaml.hpp"
 
 namespace vision {
 namespace {
@@ -17,98 +21,130 @@ bool finite_all(std::initializer_list<double> values) {
   return true;
 }
 
-std::string lower_extension(const std::string& path) {
-  const auto dot = path.find_last_of('.');
-  if (dot == std::string::npos) return "";
-  std::string ext = path.substr(dot + 1);
-  for (auto& c : ext)
-    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return ext;
-}
-
 [[noreturn]] void fail(const std::string& path, const std::string& key, const std::string& what) {
   throw CalibrationError("calibration file '" + path + "': key '" + key + "' " + what);
 }
 
-int read_int(const cv::FileNode& root, const std::string& path, const std::string& key) {
-  const cv::FileNode n = root[key];
-  if (n.empty()) fail(path, key, "is missing (expected a positive integer)");
-  if (!n.isInt()) fail(path, key, "must be a positive integer");
-  const int v = static_cast<int>(n);
-  if (v <= 0) fail(path, key, "must be a positive integer, got " + std::to_string(v));
-  return v;
+using calibration::Node;
+
+bool is_number(const Node& n) {
+  return n.kind == Node::Kind::kScalar && n.number.has_value();
+}
+
+int read_int(const Node& root, const std::string& path, const std::string& key) {
+  const Node* n = root.find(key);
+  if (!n) fail(path, key, "is missing (expected a positive integer)");
+  if (!is_number(*n) || !n->integer) fail(path, key, "must be a positive integer");
+  const double v = *n->number;
+  if (v <= 0 || v > std::numeric_limits<int>::max())
+    fail(path, key, "must be a positive integer, got " + n->text);
+  return static_cast<int>(v);
 }
 
 // A calibration matrix is at most 3x3 (or 1x14 coefficients): rows and cols
-// are bounded before OpenCV allocates the matrix they declare (a file declaring 10^5 x 10^5 would
-// otherwise take 80 GB; found by fuzzing).
+// are bounded before the values are read (a file declaring 10^5 x 10^5 made
+// OpenCV allocate 80 GB; found by fuzzing).
 constexpr int kMaxMatrixSide = 16;
-void check_matrix_shape(const cv::FileNode& n, const std::string& path, const std::string& key) {
-  if (!n["rows"].isInt() || !n["cols"].isInt()) fail(path, key, "must give integer rows and cols");
-  const int rows = static_cast<int>(n["rows"]), cols = static_cast<int>(n["cols"]);
+std::pair<int, int> matrix_shape(const Node& n, const std::string& path, const std::string& key) {
+  const Node* r = n.find("rows");
+  const Node* c = n.find("cols");
+  if (!r || !c || !is_number(*r) || !is_number(*c) || !r->integer || !c->integer)
+    fail(path, key, "must give integer rows and cols");
+  const double rows = *r->number, cols = *c->number;
   if (rows < 1 || cols < 1 || rows > kMaxMatrixSide || cols > kMaxMatrixSide)
     fail(path, key,
-         "declares rows x cols = " + std::to_string(rows) + "x" + std::to_string(cols) +
-             "; expected 1 to " + std::to_string(kMaxMatrixSide) + " of each");
+         "declares rows x cols = " + r->text + "x" + c->text + "; expected 1 to " +
+             std::to_string(kMaxMatrixSide) + " of each");
+  return {static_cast<int>(rows), static_cast<int>(cols)};
+}
+
+// The numbers of a sequence; `what` names it in errors.
+std::vector<double> numbers(const Node& seq, const std::string& path, const std::string& key,
+                            const std::string& what) {
+  if (seq.kind != Node::Kind::kSequence) fail(path, key, what + " must be a sequence of numbers");
+  std::vector<double> values;
+  for (const Node& item : seq.items) {
+    if (!is_number(item)) fail(path, key, what + " holds a value that is not a number");
+    values.push_back(*item.number);
+  }
+  return values;
 }
 
 // Reads a numeric matrix stored either as an OpenCV matrix (`!!opencv-matrix`
-// or XML `type_id="opencv-matrix"`) or as a ROS map {rows, cols, data}.
-// Returns the values row-major and the shape.
-std::vector<double> read_matrix(const cv::FileNode& root, const std::string& path,
-                                const std::string& key, int* rows, int* cols) {
-  const cv::FileNode n = root[key];
-  if (n.empty()) fail(path, key, "is missing");
+// or XML `type_id="opencv-matrix"`: rows, cols, dt, data) or as a ROS map
+// {rows, cols, data}, or as a plain sequence (one row). Returns the values
+// row-major and the shape.
+std::vector<double> read_matrix(const Node& root, const std::string& path, const std::string& key,
+                                int* rows, int* cols) {
+  const Node* n = root.find(key);
+  if (!n) fail(path, key, "is missing");
   std::vector<double> values;
-  if (n.isMap() && !n["dt"].empty()) {
-    check_matrix_shape(n, path, key);
-    cv::Mat m;
-    try {
-      n >> m;
-    } catch (const cv::Exception& e) {
-      fail(path, key, std::string("is not a readable matrix: ") + e.what());
-    }
-    if (m.empty()) fail(path, key, "is an empty matrix");
-    m.convertTo(m, CV_64F);
-    *rows = m.rows;
-    *cols = m.cols;
-    values.assign(m.begin<double>(), m.end<double>());
-  } else if (n.isMap() && !n["data"].empty()) {
-    check_matrix_shape(n, path, key);
-    *rows = static_cast<int>(n["rows"]);
-    *cols = static_cast<int>(n["cols"]);
-    const cv::FileNode data = n["data"];
-    if (!data.isSeq()) fail(path, key, "data must be a sequence of numbers");
-    for (const auto& item : data) {
-      if (!item.isReal() && !item.isInt())
-        fail(path, key, "data holds a value that is not a number");
-      values.push_back(static_cast<double>(item));
-    }
-    if (static_cast<int>(values.size()) != *rows * *cols)
+  if (n->kind == Node::Kind::kMap && (n->find("dt") || n->tag == "opencv-matrix")) {
+    std::tie(*rows, *cols) = matrix_shape(*n, path, key);
+    const Node* dt = n->find("dt");
+    // One channel of OpenCV's element types: d double, f float, i s w u c integers.
+    if (!dt || dt->kind != Node::Kind::kScalar || dt->text.size() != 1 ||
+        std::string("dfiswuc").find(dt->text) == std::string::npos)
       fail(path, key,
-           "has " + std::to_string(values.size()) +
-               " values but rows x cols = " + std::to_string(*rows) + "x" + std::to_string(*cols));
-  } else if (n.isSeq()) {
-    for (const auto& item : n) {
-      if (!item.isReal() && !item.isInt()) fail(path, key, "holds a value that is not a number");
-      values.push_back(static_cast<double>(item));
-    }
+           "must give dt, one of d, f, i, s, w, u, c (a one-channel OpenCV matrix)" +
+               (dt && dt->kind == Node::Kind::kScalar ? ", got '" + dt->text + "'" : ""));
+    const Node* data = n->find("data");
+    if (!data) fail(path, key, "has no data");
+    values = numbers(*data, path, key, "data");
+    if (dt->text == "f")
+      for (double& v : values)
+        v = static_cast<float>(v);  // what OpenCV stores for dt f
+  } else if (n->kind == Node::Kind::kMap && n->find("data")) {
+    std::tie(*rows, *cols) = matrix_shape(*n, path, key);
+    values = numbers(*n->find("data"), path, key, "data");
+  } else if (n->kind == Node::Kind::kSequence) {
+    values = numbers(*n, path, key, "it");
     *rows = 1;
     *cols = static_cast<int>(values.size());
   } else {
     fail(path, key, "is not a matrix (expected an OpenCV matrix or {rows, cols, data})");
   }
+  if (static_cast<long>(values.size()) != static_cast<long>(*rows) * *cols)
+    fail(path, key,
+         "has " + std::to_string(values.size()) +
+             " values but rows x cols = " + std::to_string(*rows) + "x" + std::to_string(*cols));
   for (double v : values)
     if (!std::isfinite(v)) fail(path, key, "holds a value that is not finite");
   return values;
 }
 
-// The bounds of a calibration file: OpenCV's FileStorage parsers recurse
-// once per nesting level and would exhaust the stack on a file nested
-// thousands of levels deep; a calibration nests 3 levels and is a few KiB.
+// An XML calibration as OpenCV's XML reader parsed it (its bounds were
+// checked first: check_text_bytes, check_xml_nesting), as the same nodes as
+// a YAML one.
+Node from_file_node(const cv::FileNode& n) {
+  Node out;
+  if (n.isMap()) {
+    out.kind = Node::Kind::kMap;
+    for (const std::string& key : n.keys())
+      out.entries.emplace_back(key, from_file_node(n[key]));
+  } else if (n.isSeq()) {
+    out.kind = Node::Kind::kSequence;
+    for (const cv::FileNode& item : n)
+      out.items.push_back(from_file_node(item));
+  } else if (n.isInt()) {
+    out.number = static_cast<int>(n);
+    out.integer = true;
+    out.text = std::to_string(static_cast<int>(n));
+  } else if (n.isReal()) {
+    out.number = static_cast<double>(n);
+    out.text = std::to_string(*out.number);
+  } else if (n.isString()) {
+    out.text = static_cast<std::string>(n);
+  }
+  return out;
+}
+
+// The bounds of a calibration file: OpenCV's XML parser recurses once per
+// element level and would exhaust the stack on a file nested thousands of
+// levels deep; a calibration nests 3 levels and is a few KiB. (The YAML
+// reader bounds its own nesting: calibration::kMaxBlockDepth.)
 constexpr std::size_t kMaxCalibrationBytes = 1u << 20;
 constexpr int kMaxCalibrationDepth = 32;
-constexpr std::size_t kMaxIndentColumns = 256;
 
 [[noreturn]] void too_deep(const std::string& path, int line, const std::string& what) {
   throw CalibrationError("calibration file '" + path + "': line " + std::to_string(line) + ": " +
@@ -133,47 +169,6 @@ void check_text_bytes(const std::string& path, const std::string& text) {
   }
 }
 
-// YAML: flow collections ([ {) nest by brackets, block collections by the
-// indentation and the "- " of each line; both are bounded. Brackets inside
-// quoted scalars and comments do not count.
-void check_yaml_nesting(const std::string& path, const std::string& text) {
-  int depth = 0, line = 1;
-  std::size_t column = 0;
-  bool line_start = true, comment = false;
-  char quote = 0;
-  for (const char c : text) {
-    if (c == '\n') {
-      ++line;
-      column = 0;
-      line_start = true;
-      comment = false;
-      continue;
-    }
-    if (line_start && (c == ' ' || c == '-' || c == '\t')) {
-      if (++column > kMaxIndentColumns)
-        too_deep(path, line,
-                 "indented more than " + std::to_string(kMaxIndentColumns) + " columns");
-      continue;
-    }
-    line_start = false;
-    if (comment) continue;
-    if (quote) {
-      if (c == quote) quote = 0;
-    } else if (c == '"' || c == '\'') {
-      quote = c;
-    } else if (c == '#') {
-      comment = true;
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxCalibrationDepth)
-        too_deep(path, line,
-                 "flow collections nested more than " + std::to_string(kMaxCalibrationDepth) +
-                     " levels deep");
-    } else if ((c == ']' || c == '}') && depth > 0) {
-      --depth;
-    }
-  }
-}
-
 // XML: elements nest by start tags; <?...?>, <!...> and empty-element tags
 // do not open a level.
 void check_xml_nesting(const std::string& path, const std::string& text) {
@@ -193,6 +188,31 @@ void check_xml_nesting(const std::string& path, const std::string& text) {
             "elements nested more than " + std::to_string(kMaxCalibrationDepth) + " levels deep");
     }
   }
+}
+
+Node read_xml(const std::string& path, const std::string& text) {
+  check_xml_nesting(path, text);
+  if (text.compare(0, 5, "<?xml") != 0)
+    throw CalibrationError("calibration file '" + path +
+                           "': starts with '<' but not with an XML declaration; expected <?xml "
+                           "version=\"1.0\"?> (OpenCV XML) or YAML");
+  cv::FileStorage fs;
+  try {
+    fs.open(text, cv::FileStorage::READ | cv::FileStorage::MEMORY | cv::FileStorage::FORMAT_XML);
+  } catch (const cv::Exception& e) {
+    throw CalibrationError("calibration file '" + path + "': not an XML calibration: " + e.what());
+  } catch (const std::exception& e) {
+    // OpenCV 4.6's parsers also throw what is not a cv::Exception: a
+    // std::length_error ("basic_string::_M_create") on some malformed files
+    // (found by libFuzzer), which a catch of cv::Exception alone let
+    // terminate the process.
+    throw CalibrationError("calibration file '" + path +
+                           "': not an XML calibration: OpenCV's XML reader failed (" + e.what() +
+                           ")");
+  }
+  if (!fs.isOpened())
+    throw CalibrationError("calibration file '" + path + "': not an XML calibration");
+  return from_file_node(fs.root());
 }
 
 }  // namespace
@@ -235,34 +255,17 @@ Camera Camera::load(const std::string& path) {
     throw CalibrationError("calibration file '" + path + "': is empty");
   check_text_bytes(path, text);
 
-  // OpenCV's YAML reader insists on its "%YAML:1.0" header; ROS camera_info
-  // files are plain YAML, so give them one.
-  const bool xml = text.compare(0, 5, "<?xml") == 0 || lower_extension(path) == "xml";
-  if (xml)
-    check_xml_nesting(path, text);
-  else
-    check_yaml_nesting(path, text);
-  int flags = cv::FileStorage::READ | cv::FileStorage::MEMORY;
-  if (xml) {
-    flags |= cv::FileStorage::FORMAT_XML;
-  } else {
-    flags |= cv::FileStorage::FORMAT_YAML;
-    if (text.compare(0, 5, "%YAML") != 0) text = "%YAML:1.0\n---\n" + text;
-  }
-
-  cv::FileStorage fs;
-  try {
-    fs.open(text, flags);
-  } catch (const cv::Exception& e) {
-    throw CalibrationError("calibration file '" + path +
-                           "': not a YAML/XML calibration: " + e.what());
-  }
-  if (!fs.isOpened())
-    throw CalibrationError("calibration file '" + path + "': not a YAML/XML calibration");
-  const cv::FileNode root = fs.root();
-  // FileNode::operator[] asserts a map: a file whose top level is a list or
-  // a scalar is refused here, not by an OpenCV assertion.
-  if (!root.isMap())
+  // YAML is read by rig's own reader of the subset calibrations use
+  // (calibration_yaml.hpp): OpenCV 4.6's YAML reader can abort the process on
+  // malformed input. XML goes to OpenCV's XML reader after the bounds above.
+  // The format is what the file holds, whatever its name: XML starts with '<'
+  // (OpenCV picks its parser by the first bytes too; from "<?xml" on, only
+  // its XML parser sees the file).
+  const std::size_t start = text.find_first_not_of(" \t\r\n");
+  const Node root =
+      text[start] == '<' ? read_xml(path, text.substr(start)) : calibration::parse_yaml(path, text);
+  // A file whose top level is a list or a scalar is refused here.
+  if (root.kind != Node::Kind::kMap)
     throw CalibrationError("calibration file '" + path +
                            "': the top level is not a map of keys; expected image_width, "
                            "image_height, camera_matrix and distortion_coefficients");
@@ -279,9 +282,10 @@ Camera Camera::load(const std::string& path) {
     fail(path, "camera_matrix", "must have the form [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
   if (k[0] <= 0 || k[4] <= 0) fail(path, "camera_matrix", "must have fx > 0 and fy > 0");
 
-  const cv::FileNode model = root["distortion_model"];
-  if (!model.empty()) {
-    const std::string name = static_cast<std::string>(model);
+  if (const Node* model = root.find("distortion_model")) {
+    if (model->kind != Node::Kind::kScalar)
+      fail(path, "distortion_model", "must be a name (expected plumb_bob)");
+    const std::string& name = model->text;
     if (name != "plumb_bob" && name != "rational_polynomial")
       fail(path, "distortion_model", "'" + name + "' is not supported (expected plumb_bob)");
   }

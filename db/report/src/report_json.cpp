@@ -285,7 +285,9 @@ std::string render_json(const Document& document, const ReportInput& in) {
                         {"drawn", p.drawn}});
   root["pictures"] = pictures;
   root["tables"] = tables;
-  return root.dump(1);
+  // A damaged database's text may hold bytes that are not UTF-8: written as
+  // U+FFFD, the report is still valid JSON (nlohmann's default throws).
+  return root.dump(1, ' ', false, json::error_handler_t::replace);
 }
 
 }  // namespace db::report

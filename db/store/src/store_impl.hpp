@@ -29,6 +29,8 @@ struct Store::Impl {
   // prefixes errors. Throws DuplicatePosition if the plan index is taken.
   // Returns the position's row id.
   std::int64_t write_rows(std::int64_t run_id, const PositionRecord& p, const std::string& where);
+  // append_position, or with retake_failed retake_failed_position.
+  void append(std::int64_t run_id, const PositionRecord& p, bool retake_failed);
   // status and plan_size of a run; throws StoreError naming the run if absent.
   std::pair<RunStatus, std::int64_t> run_state_of(std::int64_t run_id);
 };

@@ -89,7 +89,15 @@ std::int64_t Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& 
 }
 
 void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
-  Impl& s = *impl_;
+  impl_->append(run_id, p, /*retake_failed=*/false);
+}
+
+void Store::retake_failed_position(std::int64_t run_id, const PositionRecord& p) {
+  impl_->append(run_id, p, /*retake_failed=*/true);
+}
+
+void Store::Impl::append(std::int64_t run_id, const PositionRecord& p, bool retake_failed) {
+  Impl& s = *this;
   const std::string& path = s.connection.path();
   // BEGIN IMMEDIATE ... COMMIT around every row of the position: the unit of
   // atomicity, and also what makes the hundred inserts fast (one journal
@@ -97,14 +105,26 @@ void Store::append_position(std::int64_t run_id, const PositionRecord& p) {
   const auto start = std::chrono::steady_clock::now();
   sqlite::Transaction transaction(s.connection);
   const auto [status, plan_size] = s.run_state_of(run_id);
-  const std::string where = path + ": append_position(run " + std::to_string(run_id) +
-                            ", plan index " + std::to_string(p.plan_index) + ")";
+  const std::string where =
+      path + (retake_failed ? ": retake_failed_position(run " : ": append_position(run ") +
+      std::to_string(run_id) + ", plan index " + std::to_string(p.plan_index) + ")";
   if (status != RunStatus::kRunning) {
     throw StoreError(where + ": the run is " + to_string(status) + ", expected running");
   }
   if (p.plan_index < 0 || p.plan_index >= plan_size) {
     throw StoreError(where + ": plan index outside the plan [0, " + std::to_string(plan_size) +
                      ")");
+  }
+  if (retake_failed) {
+    // ON DELETE CASCADE takes its stage times, frames, detections and estimates.
+    sqlite::Statement remove(s.connection,
+                             "DELETE FROM positions WHERE run_id = ?1 AND plan_index = ?2 AND "
+                             "status = 'failed'");
+    remove.bind(1, run_id).bind(2, p.plan_index).run();
+    if (sqlite3_changes(s.connection.handle()) != 1)
+      throw StoreError(where +
+                       ": the run has no position stored as failed at this index; "
+                       "nothing written");
   }
   std::int64_t position_id = 0;
   try {

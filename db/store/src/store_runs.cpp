@@ -200,10 +200,17 @@ void Store::finish_run(std::int64_t run_id, RunStatus status, const std::string&
   transaction.commit();
 }
 
-void Store::resume_run(std::int64_t run_id) {
+void Store::resume_run(std::int64_t run_id, bool completed_with_failed) {
   sqlite::Transaction transaction(impl_->connection);
   const RunStatus current = impl_->run_state_of(run_id).first;
-  if (current == RunStatus::kCompleted) {
+  bool has_failed = false;
+  if (current == RunStatus::kCompleted && completed_with_failed) {
+    sqlite::Statement failed(impl_->connection,
+                             "SELECT 1 FROM positions WHERE run_id = ?1 AND status = 'failed' "
+                             "LIMIT 1");
+    has_failed = failed.bind(1, run_id).step();
+  }
+  if (current == RunStatus::kCompleted && !has_failed) {
     throw StoreError(impl_->connection.path() + ": resume_run(" + std::to_string(run_id) +
                      "): the run is completed; there is nothing to resume");
   }

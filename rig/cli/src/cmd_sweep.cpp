@@ -41,6 +41,7 @@ struct SweepArgs {
   std::string database;
   std::int64_t resume_run = 0;
   std::int64_t replay_run = 0;
+  bool retry_failed = false;
   int wait_subscribers = 0;
   double wait_subscribers_s = 10;
   bool no_progress = false;
@@ -91,6 +92,7 @@ int drive_run(const SweepArgs& args, const sweep::SweepConfig& config, const swe
 
   sweep::Controller controller(config, plan, bench, camera, store, run_id, link.control,
                                &link.publisher);
+  if (args.retry_failed) controller.retake_failed_positions();
   // On a terminal: a progress bar with ETA redrawn on stderr, faults and
   // pauses as lines above it; otherwise one line per message on stdout.
   const bool terminal = telemetry::is_terminal(STDERR_FILENO) && !args.no_progress;
@@ -136,7 +138,8 @@ int run_on_bench(const SweepArgs& args, const sweep::SweepConfig& config,
   db::store::Store store = sweep::open_run_database(database, config);
 
   const std::optional<sweep::StartedRun> run =
-      args.resume_run > 0 ? sweep::resume_run(config, args.resume_run, bench, store, link.control)
+      args.resume_run > 0 ? sweep::resume_run(config, args.resume_run, bench, store, link.control,
+                                              args.retry_failed)
                           : sweep::start_new_run(config, bench, store, link.control);
   if (!run) {
     std::cerr << "rig sweep: " << link.control.abort_reason()
@@ -157,6 +160,10 @@ int run_sweep(const SweepArgs& args) {
                    std::to_string(args.resume_run) +
                    " together: --replay measures a run's saved frames into a new run, --resume "
                    "continues a run on the bench; expected one of them");
+  if (args.retry_failed && args.resume_run == 0)
+    throw BadInput(
+        "--retry-failed without --resume: it measures again the positions a resumed "
+        "run stored as failed; expected --resume RUN --retry-failed");
   const sweep::SweepConfig config = sweep::load_sweep_config(args.sweep_file);
   const std::string database = args.database.empty() ? config.database_path : args.database;
   SweepLink link(config.telemetry);
@@ -182,8 +189,13 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
   cmd->add_option("--resume", args->resume_run,
                   "Continue run RUN of the database from its first missing position (the "
                   "sweep file and the files it names must be those the run started with; positions "
-                  "stored as failed are kept, not measured again)")
+                  "stored as failed are kept, not measured again, unless --retry-failed)")
       ->check(CLI::PositiveNumber);
+  cmd->add_flag("--retry-failed", args->retry_failed,
+                "With --resume: also measure again, in plan order, every position the run stored "
+                "as failed (e.g. while the camera was lost), also of a run that completed with "
+                "failed positions; each new measurement replaces the failed one, whose reason "
+                "stays in the run's events (kind \"retake\")");
   cmd->add_option("--replay", args->replay_run,
                   "Measure the frames run RUN saved ([capture] save_frames) again, into a new "
                   "run of the same database: the run's plan and recorded bench read-backs, this "
@@ -204,6 +216,7 @@ void add_sweep_command(CLI::App& app, ExitStatus& status) {
       "Example (with `rig sim --config config/sim.toml` running):\n"
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db\n"
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1\n"
+      "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --resume 1 --retry-failed\n"
       "Replay run 1's saved frames (no rig needed) into a new run:\n"
       "  rig sweep config/sweeps/ci.toml --db out/ci/run.db --replay 1");
   cmd->callback(

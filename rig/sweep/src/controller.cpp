@@ -7,6 +7,7 @@
 #include <map>
 #include <opencv2/imgcodecs.hpp>
 #include <optional>
+#include <set>
 #include <thread>
 #include <utility>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "motion/errors.hpp"
 #include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/ground_truth.hpp"
+#include "rig/sweep/sweep_camera.hpp"
 #include "run_log.hpp"
 #include "vision/timing.hpp"
 
@@ -263,12 +265,7 @@ class PositionMeasurer {
       const auto settled_at = std::chrono::system_clock::now();
       if (config_.settle.dwell.count() > 0) std::this_thread::sleep_for(config_.settle.dwell);
       const auto capture_start = Clock::now();
-      std::vector<vision::Frame> frames;
-      try {
-        frames = capture(settled_at);
-      } catch (const vision::CaptureError& e) {
-        throw PositionFailure{"camera", e.what()};
-      }
+      const std::vector<vision::Frame> frames = capture_reopening(index, settled_at);
       rec.stage_times.push_back({"capture", vision::seconds_since(capture_start)});
       const std::string unverified = unverified_reason(status.position);
       if (unverified.empty()) return frames;
@@ -276,6 +273,65 @@ class PositionMeasurer {
       log_.event("settle", unverified + "; frames taken again", index);
       rec.stage_times.clear();
     }
+  }
+
+  // The position's frames (capture). A camera that fails is reopened
+  // (reopen_camera) and the frames are taken again, once; a camera that does
+  // not come back, or fails again, fails the position.
+  std::vector<vision::Frame> capture_reopening(std::int64_t index,
+                                               std::chrono::system_clock::time_point settled_at) {
+    try {
+      return capture(settled_at);
+    } catch (const vision::CaptureError& e) {
+      if (const auto not_back = reopen_camera(index, e))
+        throw PositionFailure{"camera", std::string(e.what()) + *not_back};
+    }
+    // The bench has not been told to move since: the read-back check after
+    // these frames (unverified_reason) still vouches for them.
+    try {
+      return capture(settled_at);
+    } catch (const vision::CaptureError& e) {
+      throw PositionFailure{"camera", std::string(e.what()) + " (again, right after reopening)"};
+    }
+  }
+
+  // The camera failed at position `index` with `lost`: it is closed and
+  // opened again (the first attempt at once, then one every
+  // faults.camera_reopen_interval) until it opens and delivers a frame of the
+  // calibration's size (check_camera_frame), or faults.camera_reopen_timeout
+  // has passed since the loss (an attempt under way then is finished). Returns
+  // nothing when it is back, else why not ("" when reopening is off), to
+  // follow the loss in the position's failure reason. A camera that comes back at another image
+  // size ends the run (RunEnd): every frame would be measured with the wrong calibration.
+  std::optional<std::string> reopen_camera(std::int64_t index, const vision::CaptureError& lost) {
+    const auto timeout = config_.faults.camera_reopen_timeout;
+    if (timeout.count() == 0) return std::string();
+    log_.fault("camera", lost.what(), "reopen", index);
+    const auto since = Clock::now();
+    std::string last = lost.what();
+    int attempt = 1;
+    for (;; ++attempt) {
+      camera_.close();
+      try {
+        camera_.open();
+        check_camera_frame(camera_, config_);
+        log_.event("camera",
+                   "reopened at attempt " + std::to_string(attempt) + ", " +
+                       std::to_string(vision::seconds_since(since)) + " s after the loss",
+                   index);
+        return std::nullopt;
+      } catch (const vision::CaptureError& e) {
+        last = e.what();
+      } catch (const SweepConfigError& e) {
+        throw RunEnd{db::store::RunStatus::kFailed, e.what()};
+      }
+      if (Clock::now() - since >= timeout) break;
+      std::this_thread::sleep_for(config_.faults.camera_reopen_interval);
+    }
+    camera_.close();  // the next position tries again from a closed camera
+    return "; not reopened within faults.camera_reopen_timeout_ms = " +
+           std::to_string(timeout.count()) + " (" + std::to_string(attempt) +
+           " attempts; last: " + last + ")";
   }
 
   // Triggers and grabs the position's frames after settled_at.
@@ -417,6 +473,11 @@ struct Controller::Impl {
   FaultHandler faults;
   PositionMeasurer positions;
   const Clock::time_point started = Clock::now();
+  // Controller::retake_failed_positions: positions stored as failed are
+  // measured again; `retakes` holds those still to measure, with the reason
+  // each failed.
+  bool retake_failed = false;
+  std::map<std::int64_t, std::string> retakes;
 
   Impl(const SweepConfig& c, const SweepPlan& p, motion::Bench& b, vision::FrameSource& cam,
        db::store::Store& s, std::int64_t run, telemetry::ControlState& ctl,
@@ -462,9 +523,16 @@ struct Controller::Impl {
     std::vector<bool> stored_already(plan.size(), false);
     for (std::int64_t i : have)
       stored_already[static_cast<std::size_t>(i)] = true;
-    log.set_stored(static_cast<std::int64_t>(have.size()));
-    const std::int64_t first_index =
+    if (retake_failed)
+      for (const db::store::PositionRecord& p : store.positions(run_id))
+        if (p.status == db::store::PositionStatus::kFailed) {
+          stored_already[static_cast<std::size_t>(p.plan_index)] = false;
+          retakes[p.plan_index] = p.failure_reason;
+        }
+    log.set_stored(static_cast<std::int64_t>(have.size() - retakes.size()));
+    std::int64_t first_index =
         store.first_incomplete_position(run_id).value_or(static_cast<std::int64_t>(plan.size()));
+    if (!retakes.empty()) first_index = std::min(first_index, retakes.begin()->first);
     log.publish({{"type", "run_start"},
                  {"run_id", run_id},
                  {"database", store.path()},
@@ -488,6 +556,9 @@ struct Controller::Impl {
       return RunEnd{db::store::RunStatus::kAborted,
                     faults.abort_reason("before position " + std::to_string(index))};
     log.set_current(index);
+    const auto retake = retakes.find(index);
+    if (retake != retakes.end())
+      log.event("retake", "measuring again a position stored as failed: " + retake->second, index);
     db::store::PositionRecord rec;
     try {
       rec = positions.measure(index);
@@ -497,7 +568,12 @@ struct Controller::Impl {
     // The store times itself into the record (StoreOptions::record_store_time);
     // the whole append, commit included, goes to telemetry.
     const auto store_start = Clock::now();
-    store.append_position(run_id, rec);
+    if (retake != retakes.end()) {
+      store.retake_failed_position(run_id, rec);
+      retakes.erase(retake);
+    } else {
+      store.append_position(run_id, rec);
+    }
     rec.stage_times.push_back({"store_commit", vision::seconds_since(store_start)});
     log.count_stored(vision::seconds_since(started));
     nlohmann::json message = log.position_message(rec);
@@ -560,6 +636,10 @@ Controller::~Controller() = default;
 
 void Controller::set_observer(std::function<void(const nlohmann::json&)> observer) {
   impl_->log.set_observer(std::move(observer));
+}
+
+void Controller::retake_failed_positions() {
+  impl_->retake_failed = true;
 }
 
 RunOutcome Controller::run() {

@@ -81,9 +81,10 @@ nlohmann::json parse_stored_json(const std::string& text) {
   }
 }
 
-SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config) {
+SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config,
+                          bool completed_allowed) {
   const std::string which = "run " + std::to_string(run.id);
-  if (run.status == db::store::RunStatus::kCompleted)
+  if (run.status == db::store::RunStatus::kCompleted && !completed_allowed)
     throw RunMismatch(which + " is completed; there is nothing to resume");
   const nlohmann::json plan_json = parse_stored_json(run.description.plan_json);
   if (plan_json.is_discarded())

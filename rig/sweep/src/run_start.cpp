@@ -1,5 +1,6 @@
 #include "rig/sweep/run_start.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 
@@ -102,12 +103,22 @@ std::optional<StartedRun> start_new_run(const SweepConfig& config, motion::Bench
 
 std::optional<StartedRun> resume_run(const SweepConfig& config, std::int64_t run_id,
                                      motion::Bench& bench, db::store::Store& store,
-                                     const telemetry::ControlState& control) {
+                                     const telemetry::ControlState& control, bool retry_failed) {
   const db::store::Run run = resumable_run(store, run_id);
-  SweepPlan plan = plan_for_resume(run, config);
+  const bool completed = run.status == db::store::RunStatus::kCompleted;
+  if (completed && retry_failed) {
+    const auto positions = store.positions(run.id);
+    if (std::none_of(positions.begin(), positions.end(), [](const db::store::PositionRecord& p) {
+          return p.status == db::store::PositionStatus::kFailed;
+        }))
+      throw RunMismatch("--resume " + std::to_string(run_id) + ": run " + std::to_string(run.id) +
+                        " is completed and has no position stored as failed; there is nothing to "
+                        "retry");
+  }
+  SweepPlan plan = plan_for_resume(run, config, completed && retry_failed);
   check_frames_folder(config, store);
   if (!home_if_needed(config, bench, control)) return std::nullopt;
-  store.resume_run(run.id);
+  store.resume_run(run.id, retry_failed);
   store.record_event(run.id, "resume", "rig sweep --resume");
   return StartedRun{run.id, std::move(plan)};
 }

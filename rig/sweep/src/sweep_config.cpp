@@ -212,6 +212,10 @@ void read_faults(Table faults, SweepConfig* c) {
   c->faults.max_consecutive_failed_positions =
       static_cast<int>(faults.integer_or("max_consecutive_failed", 5, 1, 1000000));
   c->faults.link_retries = static_cast<int>(faults.integer_or("link_retries", 3, 0, 100));
+  c->faults.camera_reopen_timeout = std::chrono::milliseconds(faults.integer_or(
+      "camera_reopen_timeout_ms", c->faults.camera_reopen_timeout.count(), 0, 3600000));
+  c->faults.camera_reopen_interval = std::chrono::milliseconds(faults.integer_or(
+      "camera_reopen_interval_ms", c->faults.camera_reopen_interval.count(), 1, 600000));
   faults.reject_unknown();
 }
 
@@ -464,7 +468,9 @@ nlohmann::json SweepConfig::to_json() const {
       {"faults",
        {{"on_alarm", faults.on_alarm == AlarmAction::kPause ? "pause" : "abort"},
         {"max_consecutive_failed", faults.max_consecutive_failed_positions},
-        {"link_retries", faults.link_retries}}},
+        {"link_retries", faults.link_retries},
+        {"camera_reopen_timeout_ms", faults.camera_reopen_timeout.count()},
+        {"camera_reopen_interval_ms", faults.camera_reopen_interval.count()}}},
       {"target",
        {{"layout", target_layout_path},
         {"name", target.name},

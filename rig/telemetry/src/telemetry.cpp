@@ -2,6 +2,7 @@
 #include "rig/telemetry/telemetry.hpp"
 
 #include <sys/stat.h>
+#include <sys/un.h>
 
 #include <algorithm>
 #include <cctype>
@@ -132,7 +133,22 @@ void refuse_ipc_over_file(const std::string& endpoint, const std::string& what) 
   const std::string prefix = "ipc://";
   if (endpoint.rfind(prefix, 0) != 0) return;
   const std::string path = endpoint.substr(prefix.size());
+  // A Unix socket's path fits sockaddr_un::sun_path with its NUL; libzmq
+  // would refuse a longer one only when binding, after the checks.
+  constexpr std::size_t kMaxPath = sizeof(sockaddr_un{}.sun_path) - 1;
+  if (path.size() > kMaxPath)
+    throw EndpointError(what + " \"" + config::excerpt(endpoint) + "\": the path is " +
+                        std::to_string(path.size()) + " bytes long: expected at most " +
+                        std::to_string(kMaxPath) + " (a Unix socket's path)");
+  // The socket is created in PATH's folder, which must exist: binding fails
+  // otherwise, after the sweep file was taken.
+  const std::size_t slash = path.rfind('/');
+  const std::string folder = slash == std::string::npos ? "." : path.substr(0, slash + 1);
   struct stat st {};
+  if (::stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+    throw EndpointError(what + " \"" + config::excerpt(endpoint) + "\": \"" +
+                        config::excerpt(folder) +
+                        "\" is not an existing folder: expected a path in one");
   // lstat: a symbolic link is not followed (libzmq would unlink the link).
   if (::lstat(path.c_str(), &st) != 0 || S_ISSOCK(st.st_mode)) return;
   throw EndpointError(what + " \"" + endpoint + "\": \"" + path +

@@ -161,6 +161,61 @@ TEST_F(StoreTest, RefusesASecondPositionWithTheSamePlanIndexAndKeepsTheFirst) {
   EXPECT_EQ(store_.position(run, 6), first);
 }
 
+// rig sweep --resume --retry-failed: a failed position is replaced, with
+// everything it held, by its new measurement; a position stored ok, or one
+// not stored, is refused and left as it was.
+// --resume --retry-failed on a completed run: reopened only when it has a
+// failed position to measure again.
+TEST_F(StoreTest, ResumesACompletedRunForRetakesOnlyWhenItHasAFailedPosition) {
+  const std::int64_t clean = store_.start_run(make_run_description(1));
+  store_.append_position(clean, make_position(0));
+  store_.finish_run(clean, db::store::RunStatus::kCompleted, "");
+  EXPECT_THROW(store_.resume_run(clean, /*completed_with_failed=*/true), db::store::StoreError);
+  const std::int64_t with_failed = store_.start_run(make_run_description(1));
+  db::store::PositionRecord failed = make_position(0);
+  failed.status = db::store::PositionStatus::kFailed;
+  failed.failure_reason = "camera: gone";
+  store_.append_position(with_failed, failed);
+  store_.finish_run(with_failed, db::store::RunStatus::kCompleted, "");
+  EXPECT_THROW(store_.resume_run(with_failed), db::store::StoreError);
+  store_.resume_run(with_failed, /*completed_with_failed=*/true);
+  EXPECT_EQ(store_.run(with_failed).status, db::store::RunStatus::kRunning);
+}
+
+TEST_F(StoreTest, RetakesAFailedPositionInPlaceAndRefusesToReplaceAnOkOne) {
+  const std::int64_t run = store_.start_run(make_run_description(10));
+  db::store::PositionRecord failed = make_position(4);
+  failed.status = db::store::PositionStatus::kFailed;
+  failed.failure_reason = "camera: no frame within 500 ms";
+  store_.append_position(run, failed);
+  store_.append_position(run, make_position(5));
+
+  const db::store::PositionRecord retaken = make_position(4, 2, 2, 2);
+  store_.retake_failed_position(run, retaken);
+  EXPECT_EQ(store_.position(run, 4), retaken);
+  EXPECT_EQ(store_.completed_position_indices(run), (std::vector<std::int64_t>{4, 5}));
+  // Nothing of the failed record is left behind (its frames went with it).
+  EXPECT_EQ(store_.estimates(run, "solver_0").size(),
+            make_position(4, 2, 2, 2).frames.size() * 2 + make_position(5).frames.size() * 2)
+      << "estimates of solver_0 over positions 4 and 5";
+
+  for (std::int64_t index : {4, 5, 6}) {
+    try {
+      store_.retake_failed_position(run, make_position(index));
+      ADD_FAILURE() << "plan index " << index << " was replaced";
+    } catch (const db::store::StoreError& e) {
+      const std::string message = e.what();
+      EXPECT_NE(message.find("plan index " + std::to_string(index) +
+                             "): the run has no position stored as failed"),
+                std::string::npos)
+          << message;
+    }
+  }
+  EXPECT_EQ(store_.position(run, 4), retaken);
+  EXPECT_EQ(store_.position(run, 5), make_position(5));
+  EXPECT_EQ(store_.completed_position_indices(run), (std::vector<std::int64_t>{4, 5}));
+}
+
 TEST_F(StoreTest, WritesNothingOfAPositionWhoseLastRowIsRejected) {
   const std::int64_t run = store_.start_run(make_run_description(10));
   db::store::PositionRecord p = make_position(0);

@@ -177,4 +177,23 @@ TEST_F(FirstUse, TelemetryPortInUseNamesTheKeyAndAnotherSweep) {
   EXPECT_FALSE(fs::exists(dir_ / "run.db"));  // stopped before the database
 }
 
+// libzmq unlinks whatever is at an ipc:// path before it binds: a publish
+// endpoint over a file that is not a socket is bad input naming the key, the
+// file is kept and nothing is started.
+TEST_F(FirstUse, SweepPublishingOverAnExistingFileIsRefusedAndTheFileKept) {
+  const fs::path precious = dir_ / "precious.txt";
+  std::ofstream(precious) << "precious";
+  const std::string endpoint = "ipc://" + precious.string();
+  const rig_test::RigRun r = run_rig("sweep " + sweep_file(endpoint) + " --db " +
+                                     (dir_ / "run.db").string() + " --no-progress");
+  EXPECT_EQ(r.exit_code, 2);
+  expect_has(r.err, "telemetry.publish");
+  expect_has(r.err, "exists and is not a socket");
+  std::ifstream in(precious);
+  std::string text;
+  in >> text;
+  EXPECT_EQ(text, "precious");
+  EXPECT_FALSE(fs::exists(dir_ / "run.db"));
+}
+
 }  // namespace

@@ -77,8 +77,9 @@ class ScriptedCamera : public vision::FrameSource {
   std::deque<std::function<void()>> on_grab;
   bool stale = false;  // deliver frames stamped before the trigger
   int grabs = 0;
+  int opens = 0, closes = 0;
 
-  void open() override {}
+  void open() override { ++opens; }
   void trigger() override { triggered_ = std::chrono::system_clock::now(); }
   vision::Frame grab(std::chrono::milliseconds) override {
     ++grabs;
@@ -92,7 +93,7 @@ class ScriptedCamera : public vision::FrameSource {
     f.host_time = stale ? triggered_ - std::chrono::seconds(1) : std::chrono::system_clock::now();
     return f;
   }
-  void close() override {}
+  void close() override { ++closes; }
   std::string name() const override { return "scripted"; }
   vision::CaptureCounters counters() const override { return {}; }
 
@@ -154,15 +155,63 @@ TEST_F(ControllerTest, ASettleTimeoutFailsThePositionAndTheSweepGoesOn) {
   EXPECT_EQ(stored(1).status, db::store::PositionStatus::kOk);
 }
 
-TEST_F(ControllerTest, ACameraTimeoutFailsThePositionAndIsRecorded) {
+TEST_F(ControllerTest, ACameraTimeoutFailsThePositionAndIsRecordedWhenReopeningIsOff) {
+  config_.faults.camera_reopen_timeout = std::chrono::milliseconds(0);
   camera_.on_grab.push_back(
       [] { throw vision::CaptureTimeout("scripted", "no frame in 2000 ms"); });
   EXPECT_EQ(sweep().positions_failed, 1);
+  EXPECT_EQ(camera_.closes, 0);
   EXPECT_EQ(stored(0).failure_reason, "camera: scripted: no frame in 2000 ms");
   const auto events = store_->events(run_);
   ASSERT_FALSE(events.empty());
   EXPECT_EQ(events.front().kind, "camera");
   EXPECT_EQ(events.front().plan_index, 0);
+}
+
+// A camera that fails at a position is closed and opened again, checked with
+// one frame, and the position's frames are taken again: the position is ok.
+TEST_F(ControllerTest, ALostCameraIsReopenedAndThePositionsFramesAreTakenAgain) {
+  camera_.on_grab.push_back(
+      [] { throw vision::CaptureError("scripted", "control of the camera lost"); });
+  const rig::sweep::RunOutcome outcome = sweep();
+  EXPECT_EQ(outcome.status, db::store::RunStatus::kCompleted);
+  EXPECT_EQ(outcome.positions_failed, 0);
+  EXPECT_EQ(stored(0).status, db::store::PositionStatus::kOk);
+  EXPECT_EQ(stored(0).frames.size(), 2u);
+  EXPECT_EQ(camera_.closes, 1);
+  EXPECT_EQ(camera_.opens, 1);
+  // The failed grab, the check frame of the reopened camera, then the 2 frames
+  // of position 0 again, then 2 per other position.
+  EXPECT_EQ(camera_.grabs, 1 + 1 + 2 * static_cast<int>(config_.plan.size()));
+  const auto events = store_->events(run_);
+  ASSERT_GE(events.size(), 2u);
+  EXPECT_EQ(events[0].kind, "camera");
+  EXPECT_EQ(events[0].message, "scripted: control of the camera lost (reopen)");
+  EXPECT_EQ(events[1].kind, "camera");
+  EXPECT_EQ(events[1].message.rfind("reopened at attempt 1, ", 0), 0u) << events[1].message;
+}
+
+// A camera that does not come back within camera_reopen_timeout fails the
+// position, saying so, and the sweep goes on.
+TEST_F(ControllerTest, ACameraThatDoesNotComeBackInTimeFailsThePosition) {
+  config_.faults.camera_reopen_timeout = std::chrono::milliseconds(30);
+  config_.faults.camera_reopen_interval = std::chrono::milliseconds(10);
+  // The loss, then the check frame of every reopening attempt fails (about
+  // 3 within 30 ms at 10 ms apart; 40 failures outlast them), then the
+  // camera works.
+  for (int i = 0; i < 40; ++i)
+    camera_.on_grab.push_back([] { throw vision::CaptureTimeout("scripted", "no frame"); });
+  const rig::sweep::RunOutcome outcome = sweep();
+  EXPECT_GE(outcome.positions_failed, 1);
+  const std::string reason = stored(0).failure_reason;
+  EXPECT_EQ(reason.rfind("camera: scripted: no frame; not reopened within "
+                         "faults.camera_reopen_timeout_ms = 30 (",
+                         0),
+            0u)
+      << reason;
+  EXPECT_NE(reason.find(" attempts; last: scripted: no frame)"), std::string::npos) << reason;
+  // At least one attempt, however the host schedules the 10 ms waits.
+  EXPECT_GE(camera_.opens, 1);
 }
 
 TEST_F(ControllerTest, FramesExposedBeforeTheBenchSettledAreNeverKept) {

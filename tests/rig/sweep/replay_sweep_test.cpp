@@ -149,6 +149,11 @@ TEST(SweepReplay, ReplaysSavedFramesIntoANewRunWithIdenticalResultsAndFailsChang
   const rig_test::RigRun both = rig_test::run_rig("sweep " + sweep + " --replay 1 --resume 1");
   EXPECT_EQ(both.exit_code, 2);
   EXPECT_NE(both.err.find("--replay 1 and --resume 1 together"), std::string::npos) << both.err;
+  const rig_test::RigRun retry_replay =
+      rig_test::run_rig("sweep " + sweep + " --replay 1 --retry-failed");
+  EXPECT_EQ(retry_replay.exit_code, 2);
+  EXPECT_NE(retry_replay.err.find("--retry-failed without --resume"), std::string::npos)
+      << retry_replay.err;
   const rig_test::RigRun unknown = rig_test::run_rig("sweep " + sweep + " --replay 9");
   EXPECT_EQ(unknown.exit_code, 2);
   EXPECT_NE(unknown.err.find("--replay 9: "), std::string::npos) << unknown.err;

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "db/store/sha256.hpp"
+#include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/run_record.hpp"
 
 namespace {
@@ -164,6 +165,41 @@ TEST_F(RunStartTest, AResumeIsRefusedBeforeTheBenchMovesForAnUnknownCompletedOrR
             std::string::npos);
   EXPECT_EQ(bench_.homes, 0);
   EXPECT_EQ(store_->run(replay).status, db::store::RunStatus::kAborted);
+}
+
+// [capture] save_frames whose database folder is a symbolic link, or a file,
+// is bad input found before the bench is homed, a new run recorded or a
+// resumed one put back to running.
+TEST_F(RunStartTest, AFramesFolderThatIsALinkOrAFileIsRefusedBeforeTheBenchMoves) {
+  const std::int64_t stopped = aborted_run();
+  config_.frames_dir = (dir_ / "frames").string();
+  const fs::path folder = rig::sweep::database_frames_folder(*config_.frames_dir, store_->path());
+  fs::create_directories(dir_ / "frames");
+  fs::create_directories(dir_ / "elsewhere");
+  for (const bool as_link : {true, false}) {
+    fs::remove_all(folder);
+    if (as_link)
+      fs::create_directory_symlink(dir_ / "elsewhere", folder);
+    else
+      std::ofstream(folder) << "not a folder";
+    const auto expect_refused = [&](const std::function<void()>& start) {
+      try {
+        start();
+        ADD_FAILURE() << "started with " << folder;
+      } catch (const rig::sweep::SweepConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find("capture.save_frames = \"" + *config_.frames_dir),
+                  std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find(folder.string()), std::string::npos) << e.what();
+      }
+    };
+    expect_refused([&] { rig::sweep::start_new_run(config_, bench_, *store_, control_); });
+    expect_refused([&] { rig::sweep::resume_run(config_, stopped, bench_, *store_, control_); });
+  }
+  EXPECT_EQ(bench_.homes, 0);
+  EXPECT_EQ(store_->runs().size(), 1u);
+  EXPECT_EQ(store_->run(stopped).status, db::store::RunStatus::kAborted);
+  EXPECT_TRUE(fs::is_empty(dir_ / "elsewhere"));
 }
 
 TEST_F(RunStartTest, ADatabaseToReplayMustExist) {

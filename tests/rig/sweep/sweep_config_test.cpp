@@ -187,10 +187,32 @@ TEST(SweepConfigShipped, SmokeIsTwelvePositionsOfTwoFramesWithDefaultsElsewhere)
   EXPECT_EQ(c.grab_timeout.count(), 2000);
   EXPECT_EQ(c.faults.max_consecutive_failed_positions, 5);
   EXPECT_EQ(c.faults.link_retries, 3);
+  EXPECT_EQ(c.faults.camera_reopen_timeout.count(), 10000);
+  EXPECT_EQ(c.faults.camera_reopen_interval.count(), 500);
   EXPECT_EQ(c.capture.pixel_format, "Mono8");
   EXPECT_TRUE(c.capture.software_trigger);
   EXPECT_FALSE(c.capture.exposure_us.has_value());
   EXPECT_FALSE(c.frames_dir.has_value());
+}
+
+// The keys that bound reopening a lost camera: 0 turns it off; an interval
+// of 0 would spin on the camera's control channel.
+TEST(SweepConfigValid, TheCameraReopenKeysAreReadAndBounded) {
+  const fs::path dir = temp_dir("camera_reopen");
+  const std::string text =
+      edit(valid_sweep(), "on_alarm = \"pause\"\n",
+           "on_alarm = \"pause\"\ncamera_reopen_timeout_ms = 0\ncamera_reopen_interval_ms = 250\n");
+  const SweepConfig c = rig::sweep::load_sweep_config(write_file(dir / "off.toml", text));
+  EXPECT_EQ(c.faults.camera_reopen_timeout.count(), 0);
+  EXPECT_EQ(c.faults.camera_reopen_interval.count(), 250);
+  const std::string zero_interval = edit(valid_sweep(), "on_alarm = \"pause\"\n",
+                                         "on_alarm = \"pause\"\ncamera_reopen_interval_ms = 0\n");
+  const std::string error = load_error(write_file(dir / "zero.toml", zero_interval));
+  EXPECT_NE(error.find("faults.camera_reopen_interval_ms = 0"), std::string::npos) << error;
+  const std::string negative = edit(valid_sweep(), "on_alarm = \"pause\"\n",
+                                    "on_alarm = \"pause\"\ncamera_reopen_timeout_ms = -1\n");
+  const std::string error2 = load_error(write_file(dir / "negative.toml", negative));
+  EXPECT_NE(error2.find("faults.camera_reopen_timeout_ms = -1"), std::string::npos) << error2;
 }
 
 TEST(SweepConfigValid, RelativePathsAreResolvedAgainstTheSweepFilesFolder) {

@@ -4,6 +4,7 @@
 // bench and camera while the sweep runs; crashes are real SIGKILLs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <random>
@@ -12,6 +13,7 @@
 #include <sstream>
 #include <string>
 #include <thread>
+#include <zmq.hpp>
 
 #include "db/store/store.hpp"
 #include "motion/bench_url.hpp"
@@ -372,6 +374,7 @@ TEST(SweepEndToEnd, CameraLossFailsPositionsThenAbortsAndResumeFinishes) {
   SweepFileOptions o;
   o.max_consecutive_failed = 2;
   o.extra_capture = "grab_timeout_ms = 500\nretries = 1\n";
+  o.extra_faults = "camera_reopen_timeout_ms = 1000\n";
   const std::string sweep = rig.write_sweep(o);
   auto child = start_sweep({sweep});
   ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
@@ -380,8 +383,10 @@ TEST(SweepEndToEnd, CameraLossFailsPositionsThenAbortsAndResumeFinishes) {
   {
     SqlProbe db(rig.database());
     EXPECT_EQ(db.value("SELECT status FROM runs"), "aborted");
+    // Each failed position tried to reopen the camera for 1 s first.
     EXPECT_GE(db.count("SELECT count(*) FROM positions WHERE status = 'failed' AND "
-                       "failure_reason LIKE 'camera:%'"),
+                       "failure_reason LIKE 'camera:%not reopened within "
+                       "faults.camera_reopen_timeout_ms = 1000 (%'"),
               2);
     EXPECT_GE(db.count("SELECT count(*) FROM run_events WHERE kind = 'camera'"), 2);
     expect_positions_whole(db, 2);
@@ -392,6 +397,130 @@ TEST(SweepEndToEnd, CameraLossFailsPositionsThenAbortsAndResumeFinishes) {
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions"), 6);  // failed ones are kept, not retaken
+}
+
+// The camera goes away for 0.8 s mid-sweep (its process restarts; a new
+// camera answers at the same address, knowing nothing of the sweep's
+// stream). The first grab after it fails, the controller reopens the camera
+// (within the default faults.camera_reopen_timeout_ms, 10 s) and takes that
+// position's frames again: the run completes with every position measured
+// once and ok.
+TEST(SweepEndToEnd, ACameraThatRestartsMidSweepIsReopenedAndEveryPositionIsMeasuredOnce) {
+  SimRig rig;
+  SweepFileOptions o;
+  o.extra_capture = "grab_timeout_ms = 500\nretries = 1\n";
+  const std::string sweep = rig.write_sweep(o);
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  rig.camera().stop();
+  std::this_thread::sleep_for(800ms);
+  rig.camera().start();
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.column("SELECT plan_index FROM positions WHERE run_id = 1 ORDER BY plan_index"),
+            (std::vector<std::string>{"0", "1", "2", "3", "4", "5"}));
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+  // The loss and the reopening are in the run's events.
+  EXPECT_GE(db.count("SELECT count(*) FROM run_events WHERE kind = 'camera' AND "
+                     "message LIKE '%(reopen)'"),
+            1);
+  EXPECT_GE(db.count("SELECT count(*) FROM run_events WHERE kind = 'camera' AND "
+                     "message LIKE 'reopened at attempt %'"),
+            1);
+  expect_positions_whole(db, 2);
+}
+
+// Positions failed while the camera was gone (reopening off here, so that
+// they fail at once) are measured again by `--resume 1 --retry-failed`:
+// exactly those, and the missing ones; the positions stored ok are left as
+// they were, and each failure stays in the run's events.
+TEST(SweepEndToEnd, AResumeWithRetryFailedMeasuresAgainExactlyThePositionsStoredAsFailed) {
+  SimRig rig;
+  SweepFileOptions o;
+  o.max_consecutive_failed = 2;
+  o.extra_capture = "grab_timeout_ms = 500\nretries = 1\n";
+  o.extra_faults = "camera_reopen_timeout_ms = 0\n";
+  const std::string sweep = rig.write_sweep(o);
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  rig.camera().stop();
+  EXPECT_EQ(wait_exit(*child, 120s), 1);
+  const std::string ok_rows =
+      "SELECT plan_index || ':' || id || ':' || measured_x_mm FROM positions WHERE status = 'ok' "
+      "ORDER BY plan_index";
+  std::vector<std::string> ok_before, failed_before;
+  {
+    SqlProbe db(rig.database());
+    ASSERT_EQ(db.value("SELECT status FROM runs"), "aborted");
+    ok_before = db.column(ok_rows);
+    failed_before = db.column(
+        "SELECT plan_index FROM positions WHERE status = 'failed' ORDER BY "
+        "plan_index");
+    ASSERT_EQ(failed_before.size(), 2u);
+  }
+  rig.camera().start();
+  auto resumed = start_sweep({sweep, "--resume", "1", "--retry-failed"});
+  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.column("SELECT plan_index FROM positions WHERE run_id = 1 ORDER BY plan_index"),
+            (std::vector<std::string>{"0", "1", "2", "3", "4", "5"}));
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+  // The ok ones are the same rows as before; the failed ones were retaken.
+  const std::vector<std::string> ok_after = db.column(ok_rows);
+  for (const std::string& row : ok_before)
+    EXPECT_NE(std::find(ok_after.begin(), ok_after.end(), row), ok_after.end()) << row;
+  EXPECT_EQ(db.column("SELECT plan_index FROM run_events WHERE kind = 'retake' ORDER BY id"),
+            failed_before);
+  EXPECT_EQ(db.count("SELECT count(*) FROM run_events WHERE kind = 'camera' AND message LIKE "
+                     "'%(position_failed)'"),
+            2);
+  expect_positions_whole(db, 2);
+}
+
+// A run that completed with failed positions (fewer in a row than
+// max_consecutive_failed) is not resumed, except to measure those again.
+TEST(SweepEndToEnd, ACompletedRunWithFailedPositionsIsResumedOnlyToRetryThem) {
+  SimRig rig;
+  SweepFileOptions o;
+  o.max_consecutive_failed = 6;  // more than the 6-position plan can fail
+  o.extra_capture = "grab_timeout_ms = 500\nretries = 1\n";
+  o.extra_faults = "camera_reopen_timeout_ms = 0\n";
+  const std::string sweep = rig.write_sweep(o);
+  auto child = start_sweep({sweep});
+  ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
+  rig.camera().stop();
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  std::vector<std::string> failed_before;
+  {
+    SqlProbe db(rig.database());
+    ASSERT_EQ(db.value("SELECT status FROM runs"), "completed");
+    failed_before = db.column(
+        "SELECT plan_index FROM positions WHERE status = 'failed' ORDER BY "
+        "plan_index");
+    ASSERT_GE(failed_before.size(), 3u);  // 3, 4 and 5 at least
+  }
+  rig.camera().start();
+  const rig_test::RigRun plain = rig_test::run_rig("sweep " + sweep + " --resume 1");
+  EXPECT_EQ(plain.exit_code, 2);
+  EXPECT_NE(plain.err.find("run 1 is completed"), std::string::npos) << plain.err;
+  auto retry = start_sweep({sweep, "--resume", "1", "--retry-failed"});
+  EXPECT_EQ(wait_exit(*retry, 120s), 0);
+  {
+    SqlProbe db(rig.database());
+    EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+    EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
+    EXPECT_EQ(db.column("SELECT plan_index FROM run_events WHERE kind = 'retake' ORDER BY id"),
+              failed_before);
+    expect_positions_whole(db, 2);
+  }
+  const rig_test::RigRun nothing =
+      rig_test::run_rig("sweep " + sweep + " --resume 1 --retry-failed");
+  EXPECT_EQ(nothing.exit_code, 2);
+  EXPECT_NE(nothing.err.find("is completed and has no position stored as failed"),
+            std::string::npos)
+      << nothing.err;
 }
 
 TEST(SweepEndToEnd, ACalibrationForAnotherImageSizeStopsBeforeTheBenchMoves) {
@@ -478,6 +607,38 @@ TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPau
   EXPECT_EQ(types.back(), "run_stop");
   EXPECT_EQ(positions, (std::vector<long long>{0, 1, 2, 3, 4, 5}));
   EXPECT_NE(std::find(types.begin(), types.end(), "state"), types.end());  // paused, running
+}
+
+// A control request nested 20,000 deep sent to a running sweep: before the
+// bounded parser its reply's dump recursed once per level and the stack
+// overflow ended the sweep. It is refused by name, the sweep keeps answering
+// and completes every position.
+TEST(SweepTelemetry, ADeeplyNestedControlRequestIsRefusedAndTheSweepCompletes) {
+  SimRig rig;
+  const std::string sweep = rig.write_sweep(SweepFileOptions{});
+  auto child = start_sweep({sweep});
+  const SweepEndpoints endpoints = wait_for_endpoints(*child, 60s);
+  ASSERT_FALSE(endpoints.control.empty()) << "the sweep did not announce its endpoints";
+  constexpr int kDepth = 20000;
+  const std::string request =
+      "{\"command\": " + std::string(kDepth, '[') + std::string(kDepth, ']') + "}";
+  zmq::context_t context;
+  zmq::socket_t socket(context, zmq::socket_type::req);
+  socket.set(zmq::sockopt::linger, 0);
+  socket.set(zmq::sockopt::rcvtimeo, static_cast<int>(kControlWait.count()));
+  socket.connect(endpoints.control);
+  socket.send(zmq::buffer(request), zmq::send_flags::none);
+  zmq::message_t reply;
+  ASSERT_TRUE(socket.recv(reply)) << "no reply: the sweep's control server died";
+  EXPECT_NE(reply.to_string().find("nests arrays or objects more than 8 levels deep"),
+            std::string::npos)
+      << reply.to_string();
+  const auto status = rig::telemetry::send_control(endpoints.control, "status", kControlWait);
+  EXPECT_TRUE(status.value("ok", false)) << status.dump();
+  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  SqlProbe db(rig.database());
+  EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
+  EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
 }
 
 }  // namespace

@@ -263,6 +263,38 @@ TEST(Endpoints, IpcPathOverAnExistingFileIsRefusedAndTheFileKept) {
   std::remove(path.c_str());
 }
 
+// A Unix socket's path holds 107 bytes and its NUL: a longer ipc:// path is
+// refused when checked, not when bound after the sweep file was accepted.
+TEST(Endpoints, IpcPathLongerThanASocketPathIsRefused) {
+  const std::string fits = "ipc:///tmp/" + std::string(107 - 5, 'p');
+  EXPECT_NO_THROW(rig::telemetry::validate_endpoint(fits, false, "publish endpoint"));
+  try {
+    rig::telemetry::validate_endpoint(fits + "p", false, "publish endpoint");
+    FAIL() << "accepted a 108-byte path";
+  } catch (const rig::telemetry::EndpointError& e) {
+    EXPECT_NE(std::string(e.what()).find("the path is 108 bytes long: expected at most 107"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// Binding creates the socket in the path's folder: a folder that does not
+// exist (or is a file) is refused when checked, naming it (the mutation test
+// found the sweep file taken, then exit 1 at the bind).
+TEST(Endpoints, IpcPathInAFolderThatDoesNotExistIsRefused) {
+  const std::string missing = ::testing::TempDir() + "rig-no-such-folder/";
+  EXPECT_NO_THROW(rig::telemetry::validate_endpoint("ipc://" + ::testing::TempDir() + "rig-sock",
+                                                    false, "publish endpoint"));
+  try {
+    rig::telemetry::validate_endpoint("ipc://" + missing + "sock", false, "publish endpoint");
+    FAIL() << "accepted a socket in " << missing;
+  } catch (const rig::telemetry::EndpointError& e) {
+    EXPECT_NE(std::string(e.what()).find("\"" + missing + "\" is not an existing folder"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // A socket left by an earlier run is bound over as before.
 TEST(Endpoints, IpcPathOfAnEarlierSocketIsReused) {
   const std::string path = ::testing::TempDir() + "rig-ipc-reused";

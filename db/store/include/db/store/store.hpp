@@ -123,9 +123,11 @@ class Store {
   void finish_run(std::int64_t run_id, RunStatus status, const std::string& reason);
 
   // Puts an aborted or failed run, or one left running by a crash, back to
-  // running for `rig sweep --resume`; clears ended_at and the reason. Throws
-  // StoreError for an unknown or completed run.
-  void resume_run(std::int64_t run_id);
+  // running for `rig sweep --resume`; clears ended_at and the reason. With
+  // completed_with_failed, also a completed run that has a position stored as
+  // failed (`--resume RUN --retry-failed`). Throws StoreError for an unknown
+  // run or any other completed one.
+  void resume_run(std::int64_t run_id, bool completed_with_failed = false);
 
   // Every run, oldest first, with its stored files: runs are few and small
   // next to their positions.
@@ -139,6 +141,16 @@ class Store {
   // the run already has position.plan_index; StoreError if the run does not
   // exist, is not running, or plan_index is outside [0, plan_size).
   void append_position(std::int64_t run_id, const PositionRecord& position);
+
+  // A failed position measured again (`rig sweep --resume RUN --retry-failed`):
+  // in one transaction, the run's position at position.plan_index, which must
+  // be stored as failed, is deleted with everything it held and `position` is
+  // written in its place. Either the new position is stored or the failed
+  // one is still there. The failure itself stays recorded in the run's events
+  // (the controller records a "camera"/"settle" fault and a "retake" event).
+  // Throws StoreError naming the run and plan index if the run has no failed
+  // position there (none, or one stored ok), and as append_position.
+  void retake_failed_position(std::int64_t run_id, const PositionRecord& position);
 
   // Records the camera that takes the run's frames (table run_camera, one
   // per run): a resumed run records the camera it was resumed with, replacing

@@ -14,9 +14,14 @@
 //   bench link lost                 the driver reconnects by itself; if it
 //                                   gives up, retry the position up to
 //                                   link_retries times, then the run fails
-//   settle timeout, camera timeout, the position is stored as failed with its
-//   incomplete frames, bench moved  reason and the sweep continues; after
-//   during the exposure             max_consecutive_failed of them, abort
+//   camera lost (a grab or trigger  the camera is closed and opened again
+//   fails after its own retries)    until it delivers a frame, within
+//                                   faults.camera_reopen_timeout; then the
+//                                   frames are taken again (once)
+//   settle timeout, camera not      the position is stored as failed with its
+//   back in time, incomplete        reason and the sweep continues; after
+//   frames, bench moved during      max_consecutive_failed of them, abort
+//   the exposure
 //   abort requested (rig ctl abort, the current position is finished and
 //   SIGINT/SIGTERM via ControlState) stored, then the run ends aborted
 // Whatever happens, every stored position is whole (db::store::Store) and the run can
@@ -69,6 +74,13 @@ class Controller {
   // (a database that cannot be written) finish the run as failed when the
   // database allows it, then propagate.
   RunOutcome run();
+
+  // Positions the run has stored as failed are measured again too, in plan
+  // order with the missing ones, each replacing its failed record
+  // (db::store::Store::retake_failed_position) after a "retake" event that
+  // keeps the reason it failed. For `rig sweep --resume RUN --retry-failed`.
+  // Call before run().
+  void retake_failed_positions();
 
   // Also hands every telemetry message to `observer` (on the controller's
   // thread), e.g. for the progress bar of `rig sweep`. Call before run().

@@ -41,8 +41,10 @@ nlohmann::json parse_stored_json(const std::string& text);
 // For `rig sweep --resume RUN`: the run's stored plan, after checking that
 // every file the config read has the SHA-256 the run stored (a resumed run
 // must measure with what it started with). Throws RunMismatch naming the
-// file that changed, or the run's status if it is completed; PlanError if the
+// file that changed, or the run's status if it is completed (unless
+// completed_allowed: `--retry-failed` on a run with failed positions); PlanError if the
 // stored plan is damaged; SweepConfigError if a file cannot be read.
-SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config);
+SweepPlan plan_for_resume(const db::store::Run& run, const SweepConfig& config,
+                          bool completed_allowed = false);
 
 }  // namespace rig::sweep

@@ -56,9 +56,12 @@ std::optional<StartedRun> start_new_run(const SweepConfig& config, motion::Bench
 // its stored plan, or nothing (nothing recorded) when `control` had an abort
 // requested by then. Throws RunMismatch "--resume N: ..." for an unknown run
 // or a replay, what plan_for_resume throws, then as start_new_run.
+// With retry_failed (`--retry-failed`), a completed run that has positions
+// stored as failed is resumed too (RunMismatch for one that has none).
 std::optional<StartedRun> resume_run(const SweepConfig& config, std::int64_t run_id,
                                      motion::Bench& bench, db::store::Store& store,
-                                     const telemetry::ControlState& control);
+                                     const telemetry::ControlState& control,
+                                     bool retry_failed = false);
 
 // Opens the database holding the run to replay, as open_run_database does,
 // but only if it exists: a replay must not create an empty database. Throws

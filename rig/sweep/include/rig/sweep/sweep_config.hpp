@@ -132,6 +132,16 @@ struct FaultPolicy {
   // Bench link drop: reconnect attempts (each within the profile's reconnect
   // timeout) before the run fails.
   int link_retries = 3;
+  // Camera lost at a position (a grab or trigger fails after the capture's
+  // own retries): the camera is closed and opened again, one attempt every
+  // camera_reopen_interval, until one opens and delivers a frame of the
+  // calibration's size or camera_reopen_timeout has passed since the loss;
+  // then the position's frames are taken again. 0 never reopens: the
+  // position fails at once. A camera that does not come back within the
+  // timeout fails the position (and counts towards
+  // max_consecutive_failed_positions).
+  std::chrono::milliseconds camera_reopen_timeout{10000};
+  std::chrono::milliseconds camera_reopen_interval{500};
 };
 
 struct SweepConfig {

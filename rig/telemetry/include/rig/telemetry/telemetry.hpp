@@ -68,8 +68,9 @@ void validate_endpoint(const std::string& endpoint, bool allow_remote, const std
 // libzmq deletes whatever is at an ipc:// path before it binds. Throws
 // EndpointError when `endpoint` is ipc://PATH and PATH exists (as anything,
 // a symbolic link included) but is not a socket; a socket left by an earlier
-// run is replaced as before. The publisher and the control server check this
-// before they bind.
+// run is replaced as before; also when PATH is longer than a Unix socket's
+// path can be (107 bytes) or its folder does not exist. The publisher and
+// the control server check this before they bind.
 void refuse_ipc_over_file(const std::string& endpoint, const std::string& what);
 
 // Checks both endpoints as validate_endpoint does, and that they differ.
