@@ -28,7 +28,7 @@ std::string fmt_mm(double v) {
 BenchUrl drive_url(const BenchUrl& bench, const AxisDrive& d) {
   if (d.url) return *d.url;
   BenchUrl u = bench;
-  u.unit.reset();  // the drive's link.unit_id
+  u.unit = d.drive.unit_id;  // named in the URL, so that messages tell the drives apart
   return u;
 }
 

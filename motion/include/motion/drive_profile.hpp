@@ -1,7 +1,8 @@
 // motion::DriveProfile: everything ModbusBench knows about a drive, read from a
 // TOML file (config/benches/*.toml), never from code. The default map of the
 // simulated bench is docs/register-map.md and ships as config/benches/sim.toml; a documented
-// template for a real drive is config/benches/template_real_drive.toml.
+// template for a real drive is config/benches/template_real_drive.toml, for two
+// single-axis drives config/benches/template_two_drives.toml.
 //
 // Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
 // Positions are signed 32-bit two's complement counts in two consecutive
