@@ -142,6 +142,14 @@ std::string ModbusBench::link_hint(int err) const {
                      ": check the drive's unit id (link.unit_id or ?unit=), that baud, parity and "
                      "stop bits match the drive's serial settings, and the wiring (A/B swapped?)";
   }
+  if (err == EMBBADSLAVE && !tcp) {
+    const std::optional<int> other = link_.foreign_unit();
+    return "the answer came from " +
+           (other ? "unit " + std::to_string(*other) : std::string("another unit")) +
+           ", not from unit " + unit +
+           " that was asked, and is refused: is link.unit_id (or the URL's ?unit=) the drive's "
+           "station address, and does no other device on the line answer for it?";
+  }
   if (err == EMBBADCRC || err == EMBBADDATA || err == EMBBADSLAVE) {
     return tcp ? "the answers are not the drive's Modbus: is this port a Modbus TCP server?"
                : "garbled answers: baud, parity or stop bits of the URL differ from the drive's, "
