@@ -105,6 +105,7 @@ void check_registers(const DriveProfile& p) {
   std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, w},
                                 {"registers.status", r.status, 1},
                                 {"registers.alarm", r.alarm, 1}};
+  if (r.moving_status >= 0) feedback.push_back({"registers.moving_status", r.moving_status, 1});
   if (!p.single_axis()) {
     holding.insert(holding.begin() + 1, {"registers.target_y", r.target_y, w});
     feedback.insert(feedback.begin() + 1, {"registers.actual_y", r.actual_y, w});
@@ -134,10 +135,13 @@ void check_status_bits(const DriveProfile& p) {
   if (p.protocol.servo_ready_bit >= 0) {
     bits.push_back({"handshake.servo_ready_bit", p.protocol.servo_ready_bit});
   }
+  // With registers.moving_status, the moving bit is of another register.
+  const bool moving_apart = p.registers.moving_status >= 0;
   for (size_t i = 0; i < bits.size(); ++i) {
     const auto& [field, bit] = bits[i];
     if (bit < 0 || bit > 15) fail(p, field, std::to_string(bit), "a bit of a register (0..15)");
     for (size_t j = 0; j < i; ++j) {
+      if (moving_apart && (i == 1 || j == 1)) continue;  // bits[1] is the moving bit
       if (bit == bits[j].second) {
         fail(p, field, std::to_string(bit), "a bit that no other status uses",
              "bit " + std::to_string(bit) + " is also " + field_name(p, bits[j].first));
@@ -385,6 +389,7 @@ void read_registers(config::Table regs, RegisterMap* r) {
   r->actual_y = addr("actual_y");
   r->status = addr("status");
   r->alarm = addr("alarm");
+  if (regs.has("moving_status")) r->moving_status = addr("moving_status");
   regs.reject_unknown();
 }
 
@@ -467,6 +472,7 @@ void read_axis_registers(config::Table regs, RegisterMap* r) {
   r->actual_x = addr("actual");
   r->status = addr("status");
   r->alarm = addr("alarm");
+  if (regs.has("moving_status")) r->moving_status = addr("moving_status");
   regs.reject_unknown();
 }
 

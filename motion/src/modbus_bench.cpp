@@ -46,8 +46,10 @@ ModbusBench::ModbusBench(const BenchUrl& url, DriveProfile profile)
   const int w = profile_.position_registers();
   // A single-axis drive has no second read-back: its actual_x stands in.
   const int actual_y = profile_.single_axis() ? r.actual_x : r.actual_y;
-  const int first = std::min({r.actual_x, actual_y, r.status, r.alarm});
-  const int last = std::max({r.actual_x + w - 1, actual_y + w - 1, r.status, r.alarm});
+  // Without a second status register, status stands in for it.
+  const int moving = r.moving_status >= 0 ? r.moving_status : r.status;
+  const int first = std::min({r.actual_x, actual_y, r.status, r.alarm, moving});
+  const int last = std::max({r.actual_x + w - 1, actual_y + w - 1, r.status, r.alarm, moving});
   if (last - first + 1 <= kMaxReadRegisters) {
     feedback_first_ = first;
     feedback_count_ = last - first + 1;
@@ -226,7 +228,8 @@ BenchStatus ModbusBench::decode_feedback(const std::uint16_t* block, int first) 
   s.status_word = bits;
   auto bit = [bits](int n) { return ((bits >> n) & 1u) != 0; };
   s.homed = bit(b.homed);
-  s.moving = bit(b.moving);
+  s.moving = r.moving_status >= 0 ? ((block[r.moving_status - first] >> b.moving) & 1u) != 0
+                                  : bit(b.moving);
   s.in_position = bit(b.in_position);
   s.alarm = bit(b.alarm);
   s.emergency_stop = bit(b.emergency_stop);
@@ -247,8 +250,11 @@ int ModbusBench::read_feedback(BenchStatus& out) {
   std::vector<std::uint16_t> block(65537, 0);
   const int w = profile_.position_registers();
   const int actual_y = profile_.single_axis() ? r.actual_x : r.actual_y;
-  for (auto [addr, n] :
-       {std::pair<int, int>{r.actual_x, w}, {actual_y, w}, {r.status, 1}, {r.alarm, 1}}) {
+  for (auto [addr, n] : {std::pair<int, int>{r.actual_x, w},
+                         {actual_y, w},
+                         {r.status, 1},
+                         {r.alarm, 1},
+                         {r.moving_status >= 0 ? r.moving_status : r.status, 1}}) {
     if (const int err = link_.read(r.feedback, addr, n, block.data() + addr); err != 0) return err;
   }
   out = decode_feedback(block.data(), 0);

@@ -268,6 +268,37 @@ TEST(TwoDriveProfile, ShippedTemplateLoads) {
   EXPECT_EQ(p.axis_drives->y.drive.unit_id, 2);
 }
 
+// The drive-family profiles load and say what their header says; they are
+// not yet driven against an emulator of their manual's semantics.
+TEST(TwoDriveProfile, ShippedDriveFamilyProfilesLoad) {
+  const motion::DriveProfile iai = motion::load_drive_profile(
+      std::string(RIG_SOURCE_DIR) + "/config/benches/iai_pcon_two_axes.toml");
+  ASSERT_TRUE(iai.axis_drives);
+  const motion::DriveProfile& pcon = iai.axis_drives->y.drive;
+  EXPECT_EQ(pcon.unit_id, 2);
+  EXPECT_EQ(pcon.registers.status, 0x9005);
+  EXPECT_EQ(pcon.registers.moving_status, 0x9007);  // MOVE in DSSE, apart from DSS1
+  EXPECT_EQ(pcon.protocol.handshake, motion::CommandHandshake::kPulse);
+  EXPECT_EQ(pcon.protocol.servo_on, 0x1000);
+  EXPECT_EQ(pcon.alarm_meaning(0x083), "absolute move command before home return completed");
+  const motion::DriveProfile oriental = motion::load_drive_profile(
+      std::string(RIG_SOURCE_DIR) + "/config/benches/oriental_az_two_axes.toml");
+  ASSERT_TRUE(oriental.axis_drives);
+  EXPECT_EQ(oriental.axis_drives->x.drive.registers.target_x, 0x1802);
+  EXPECT_EQ(oriental.axis_drives->x.drive.registers.moving_status, -1);
+  EXPECT_EQ(oriental.axis_drives->x.drive.alarm_meaning(0x4A), "return-to-home incomplete");
+}
+
+TEST(TwoDriveProfile, AMovingBitInASecondStatusRegisterMayReuseABitNumber) {
+  // MOVE is bit 5 of DSSE; bit 5 of DSS1 is another signal. Without
+  // moving_status the same bit number twice is refused.
+  const std::string apart = error_of("alarm = 0x203\n", "alarm = 0x203\nmoving_status = 0x204\n");
+  EXPECT_EQ(apart, "accepted");
+  EXPECT_EQ(error_of("moving = 5\n", "moving = 3\n"),
+            "two.toml: x.status_bits.in_position = 3: bit 3 is also x.status_bits.moving; expected "
+            "a bit that no other status uses");
+}
+
 TEST(TwoDriveProfile, ErrorsNameTheDrivesTable) {
   EXPECT_EQ(error_of("actual = 0x200", "actual = 0x101"),
             "two.toml: x.registers.actual = 257: registers 257..258 overlap x.registers.target "

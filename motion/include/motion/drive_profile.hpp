@@ -48,6 +48,10 @@ struct RegisterMap {
   int actual_y = 2;  // first of 2 registers, int32 counts
   int status = 4;    // 1 register of status bits (see StatusBits)
   int alarm = 5;     // 1 register, alarm code (0 = none)
+  // Optional (-1: none): a second status register, in the feedback table,
+  // holding the moving bit (status_bits.moving) when the drive keeps it apart
+  // from the others (IAI: MOVE in DSSE 9007h, PEND and HEND in DSS1 9005h).
+  int moving_status = -1;
 };
 
 // Bit positions (0..15) in the status register.
