@@ -1,6 +1,7 @@
 // Reading and validating drive profiles (see drive_profile.hpp).
 #include "motion/drive_profile.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -16,10 +17,31 @@ using config::format_number;
 
 constexpr std::int64_t kMaxAddress = 65535;
 
+// The name in the file of a field of `p` named as in a controller's profile:
+// for a single-axis drive, its own tables are under [x] or [y] and name the
+// axis once ("registers.target_x" -> "y.registers.target"), while [motion]
+// and [soft_limits] are the bench's, with the axis's keys.
+std::string field_name(const DriveProfile& p, const std::string& field) {
+  if (!p.single_axis()) return field;
+  const std::string a(1, p.axis);
+  for (const char* shared : {"soft_limits.x_", "motion.home_x"}) {
+    const std::string prefix(shared);
+    if (field.rfind(prefix, 0) == 0) {
+      return prefix.substr(0, prefix.size() - 2) + (prefix.back() == '_' ? a + "_" : "_" + a) +
+             field.substr(prefix.size());
+    }
+  }
+  if (field.rfind("motion.", 0) == 0) return field;
+  std::string own = field;
+  if (own.size() > 2 && own.compare(own.size() - 2, 2, "_x") == 0) own.resize(own.size() - 2);
+  return a + "." + own;
+}
+
 // "SOURCE: FIELD = VALUE: [PROBLEM; ]expected EXPECTED" for a value in memory.
 [[noreturn]] void fail(const DriveProfile& p, const std::string& field, const std::string& value,
                        const std::string& expected, const std::string& problem = "") {
-  throw ProfileError(config::error_message(p.source, field, value, expected, problem));
+  throw ProfileError(
+      config::error_message(p.source, field_name(p, field), value, expected, problem));
 }
 
 // Registers occupied by one field: [first, first + count).
@@ -33,10 +55,15 @@ std::string range(int first, int count) {
   return std::to_string(first) + ".." + std::to_string(first + count - 1);
 }
 
+// Spans name their fields as in the file already (field_name).
 void check_no_overlap(const DriveProfile& p, const std::vector<Span>& spans) {
+  auto fail = [&p](const std::string& field, const std::string& value, const std::string& expected,
+                   const std::string& problem = "") {
+    throw ProfileError(config::error_message(p.source, field, value, expected, problem));
+  };
   for (const Span& s : spans) {
     if (s.first < 0 || s.first + s.count - 1 > kMaxAddress) {
-      fail(p, s.field, std::to_string(s.first),
+      fail(s.field, std::to_string(s.first),
            "an address whose " + std::to_string(s.count) + " register(s) fit in 0..65535");
     }
   }
@@ -45,7 +72,7 @@ void check_no_overlap(const DriveProfile& p, const std::vector<Span>& spans) {
       const Span& a = spans[i];
       const Span& b = spans[j];
       if (a.first < b.first + b.count && b.first < a.first + a.count) {
-        fail(p, b.field, std::to_string(b.first),
+        fail(b.field, std::to_string(b.first),
              "registers that no other field of the same table uses",
              "registers " + range(b.first, b.count) + " overlap " + a.field + " (" +
                  range(a.first, a.count) + ")");
@@ -73,13 +100,20 @@ void check_registers(const DriveProfile& p) {
   const RegisterMap& r = p.registers;
   const int w = p.position_registers();
   std::vector<Span> holding = {{"registers.target_x", r.target_x, w},
-                               {"registers.target_y", r.target_y, w},
                                {"registers.speed", r.speed, 1},
                                {"registers.command", r.command, 1}};
   std::vector<Span> feedback = {{"registers.actual_x", r.actual_x, w},
-                                {"registers.actual_y", r.actual_y, w},
                                 {"registers.status", r.status, 1},
                                 {"registers.alarm", r.alarm, 1}};
+  if (r.moving_status >= 0) feedback.push_back({"registers.moving_status", r.moving_status, 1});
+  if (!p.single_axis()) {
+    holding.insert(holding.begin() + 1, {"registers.target_y", r.target_y, w});
+    feedback.insert(feedback.begin() + 1, {"registers.actual_y", r.actual_y, w});
+  }
+  for (Span& s : holding)
+    s.field = field_name(p, s.field);
+  for (Span& s : feedback)
+    s.field = field_name(p, s.field);
   if (r.feedback == RegisterTable::kHolding) {
     holding.insert(holding.end(), feedback.begin(), feedback.end());
     check_no_overlap(p, holding);
@@ -101,13 +135,16 @@ void check_status_bits(const DriveProfile& p) {
   if (p.protocol.servo_ready_bit >= 0) {
     bits.push_back({"handshake.servo_ready_bit", p.protocol.servo_ready_bit});
   }
+  // With registers.moving_status, the moving bit is of another register.
+  const bool moving_apart = p.registers.moving_status >= 0;
   for (size_t i = 0; i < bits.size(); ++i) {
     const auto& [field, bit] = bits[i];
     if (bit < 0 || bit > 15) fail(p, field, std::to_string(bit), "a bit of a register (0..15)");
     for (size_t j = 0; j < i; ++j) {
+      if (moving_apart && (i == 1 || j == 1)) continue;  // bits[1] is the moving bit
       if (bit == bits[j].second) {
         fail(p, field, std::to_string(bit), "a bit that no other status uses",
-             "bit " + std::to_string(bit) + " is also " + bits[j].first);
+             "bit " + std::to_string(bit) + " is also " + field_name(p, bits[j].first));
       }
     }
   }
@@ -131,20 +168,20 @@ void check_command_codes(const DriveProfile& p) {
     }
     if ((code & h.servo_on) != 0) {
       fail(p, field, std::to_string(code),
-           "a code sharing no bit with handshake.servo_on (" + std::to_string(h.servo_on) + ")",
+           "a code sharing no bit with " + field_name(p, "handshake.servo_on") + " (" +
+               std::to_string(h.servo_on) + ")",
            "the servo-on bits are kept set in every command");
     }
     for (size_t j = 0; j < i; ++j) {
       if (code == codes[j].second) {
         fail(p, field, std::to_string(code), "a code that no other command uses",
-             "code " + std::to_string(code) + " is also " + codes[j].first);
+             "code " + std::to_string(code) + " is also " + field_name(p, codes[j].first));
       }
     }
   }
 }
 
-// Speeds that the speed register holds, and a tolerance the encoder can meet.
-void check_speeds_and_tolerance(const DriveProfile& p) {
+void check_speeds(const DriveProfile& p) {
   if (!(p.max_speed_mm_s > 0)) {
     fail(p, "motion.max_speed_mm_s", format_number(p.max_speed_mm_s), "a speed > 0 mm/s");
   }
@@ -152,15 +189,23 @@ void check_speeds_and_tolerance(const DriveProfile& p) {
     fail(p, "motion.default_speed_mm_s", format_number(p.default_speed_mm_s),
          "a speed in (0, max_speed_mm_s = " + format_number(p.max_speed_mm_s) + "] mm/s");
   }
+}
+
+// Speeds that the speed register holds, and a tolerance the encoder can meet.
+void check_speeds_and_tolerance(const DriveProfile& p) {
+  check_speeds(p);
+  const std::string per_drive =
+      p.single_axis() ? std::string(" of the ") + p.axis + " axis drive" : "";
   if (std::lround(p.max_speed_mm_s * p.speed_units_per_mm_s) > 65535) {
     fail(p, "motion.max_speed_mm_s", format_number(p.max_speed_mm_s),
          "a speed of at most 65535 speed units (" + format_number(65535 / p.speed_units_per_mm_s) +
              " mm/s)",
-         "it does not fit in one 16-bit speed register");
+         "it does not fit in one 16-bit speed register" + per_drive);
   }
   if (!(p.position_tolerance_mm * p.counts_per_mm >= 1.0)) {
     fail(p, "motion.position_tolerance_mm", format_number(p.position_tolerance_mm),
-         "a tolerance of at least one count (" + format_number(1.0 / p.counts_per_mm) + " mm)",
+         "a tolerance of at least one count" + per_drive + " (" +
+             format_number(1.0 / p.counts_per_mm) + " mm)",
          "finer than one count, the bench could never settle");
   }
 }
@@ -168,9 +213,10 @@ void check_speeds_and_tolerance(const DriveProfile& p) {
 void check_handshake(const DriveProfile& p) {
   const CommandProtocol& h = p.protocol;
   if (h.servo_on != 0 && h.servo_ready_bit < 0) {
-    throw ProfileError(p.source +
-                       ": handshake.servo_ready_bit: missing; expected the status bit (0..15) "
-                       "the drive sets once the servo is on, with handshake.servo_on");
+    throw ProfileError(p.source + ": " + field_name(p, "handshake.servo_ready_bit") +
+                       ": missing; expected the status bit (0..15) the drive sets once the servo "
+                       "is on, with " +
+                       field_name(p, "handshake.servo_on"));
   }
   if (h.servo_on == 0 && h.servo_ready_bit >= 0) {
     fail(p, "handshake.servo_ready_bit", std::to_string(h.servo_ready_bit),
@@ -187,10 +233,15 @@ void check_soft_limits(const DriveProfile& p) {
   const SoftLimits& s = p.soft_limits;
   const double max_counts = p.position_bits == 16 ? std::numeric_limits<std::int16_t>::max() - 1.0
                                                   : std::numeric_limits<std::int32_t>::max() - 1.0;
-  for (auto [name, v] : {std::pair<const char*, double>{"soft_limits.x_min_mm", s.x_min_mm},
-                         {"soft_limits.x_max_mm", s.x_max_mm},
-                         {"soft_limits.y_min_mm", s.y_min_mm},
-                         {"soft_limits.y_max_mm", s.y_max_mm}}) {
+  std::vector<std::pair<const char*, double>> limits = {{"soft_limits.x_min_mm", s.x_min_mm},
+                                                        {"soft_limits.x_max_mm", s.x_max_mm}};
+  if (!p.single_axis()) {
+    limits.push_back({"soft_limits.y_min_mm", s.y_min_mm});
+    limits.push_back({"soft_limits.y_max_mm", s.y_max_mm});
+  }
+  // A bench of two drives: each drive checks that its axis fits its registers.
+  if (p.axis_drives) limits.clear();
+  for (auto [name, v] : limits) {
     const double counts = v * p.counts_per_mm;
     if (!std::isfinite(v) || std::fabs(counts) > max_counts) {
       fail(p, name, format_number(v),
@@ -202,6 +253,14 @@ void check_soft_limits(const DriveProfile& p) {
   if (!(s.x_min_mm < s.x_max_mm)) {
     fail(p, "soft_limits.x_max_mm", format_number(s.x_max_mm),
          "a limit > soft_limits.x_min_mm (" + format_number(s.x_min_mm) + ")");
+  }
+  if (p.single_axis()) {
+    if (!(p.home_x_mm >= s.x_min_mm && p.home_x_mm <= s.x_max_mm)) {
+      fail(p, "motion.home_x_mm", format_number(p.home_x_mm),
+           "a home inside the soft limits " + format_number(s.x_min_mm) + ".." +
+               format_number(s.x_max_mm) + " mm");
+    }
+    return;
   }
   if (!(s.y_min_mm < s.y_max_mm)) {
     fail(p, "soft_limits.y_max_mm", format_number(s.y_max_mm),
@@ -270,6 +329,22 @@ std::int32_t decode_int32(const std::uint16_t in[2], WordOrder order) {
 }
 
 void validate(const DriveProfile& p) {
+  if (p.axis_drives) {
+    // A bench of two drives: its shared [motion] and [soft_limits] here, and
+    // each drive with its own link, units and registers.
+    check_speeds(p);
+    check_soft_limits(p);
+    check_timing(p);
+    for (const AxisDrive* d : {&p.axis_drives->x, &p.axis_drives->y}) {
+      if (d->drive.axis != (d == &p.axis_drives->x ? 'x' : 'y')) {
+        throw ProfileError(p.source + ": the drive of the " + (d == &p.axis_drives->x ? "x" : "y") +
+                           " axis is marked as the drive of axis '" + d->drive.axis +
+                           "'; expected its own axis");
+      }
+      validate(d->drive);
+    }
+    return;
+  }
   check_link_and_units(p);
   check_registers(p);
   check_status_bits(p);
@@ -314,6 +389,7 @@ void read_registers(config::Table regs, RegisterMap* r) {
   r->actual_y = addr("actual_y");
   r->status = addr("status");
   r->alarm = addr("alarm");
+  if (regs.has("moving_status")) r->moving_status = addr("moving_status");
   regs.reject_unknown();
 }
 
@@ -385,22 +461,115 @@ void read_alarms(config::Table alarms, std::map<int, std::string>* meanings) {
   }
 }
 
+// A single-axis drive's [registers]: one target and one read-back.
+void read_axis_registers(config::Table regs, RegisterMap* r) {
+  auto addr = [&](const char* key) { return static_cast<int>(regs.integer(key, 0, kMaxAddress)); };
+  r->target_x = addr("target");
+  r->speed = addr("speed");
+  r->command = addr("command");
+  r->feedback = regs.choice("feedback", {"input", "holding"}) == "input" ? RegisterTable::kInput
+                                                                         : RegisterTable::kHolding;
+  r->actual_x = addr("actual");
+  r->status = addr("status");
+  r->alarm = addr("alarm");
+  if (regs.has("moving_status")) r->moving_status = addr("moving_status");
+  regs.reject_unknown();
+}
+
+// The tables of one drive, at the top of a controller's profile or in the
+// [x] / [y] table of a bench of two drives.
+void read_drive_tables(config::Table& t, DriveProfile* p) {
+  read_link(t.table("link"), p);
+  read_units(t.table("units"), p);
+  if (p->single_axis()) {
+    read_axis_registers(t.table("registers"), &p->registers);
+  } else {
+    read_registers(t.table("registers"), &p->registers);
+  }
+  read_status_bits(t.table("status_bits"), &p->status_bits);
+  read_commands(t.table("commands"), &p->commands);
+}
+
+// The optional tables of one drive: its command conventions and alarm texts.
+void read_drive_options(config::Table& t, DriveProfile* p) {
+  read_handshake(t.optional_table("handshake"), &p->protocol);
+  read_alarms(t.optional_table("alarms"), &p->alarm_meanings);
+}
+
+// [x] or [y] of a bench of two drives: the drive's own tables and its
+// optional link of its own.
+AxisDrive read_axis_drive(config::Table t, char axis) {
+  AxisDrive d;
+  d.drive.axis = axis;
+  read_drive_tables(t, &d.drive);
+  read_drive_options(t, &d.drive);
+  if (t.has("url")) {
+    const std::string url = t.string("url", "a bench URL");
+    try {
+      d.url = BenchUrl::parse(url);
+    } catch (const ProfileError& e) {
+      t.fail("url", "modbus-tcp://HOST:PORT[?unit=N] or modbus-rtu:///dev/DEVICE?baud=...",
+             e.what());
+    }
+  }
+  t.reject_unknown();
+  return d;
+}
+
+// What a drive of a two-drive bench takes from the bench: its axis's soft
+// limits and home, and the shared [motion]; it keeps its own link timeouts.
+void share_bench_motion(const DriveProfile& bench, DriveProfile* d) {
+  const bool x = d->axis == 'x';
+  d->name = bench.name + ": " + (x ? "X" : "Y") + " axis drive";
+  d->source = bench.source;
+  d->default_speed_mm_s = bench.default_speed_mm_s;
+  d->max_speed_mm_s = bench.max_speed_mm_s;
+  d->position_tolerance_mm = bench.position_tolerance_mm;
+  const Timing own = d->timing;
+  d->timing = bench.timing;
+  d->timing.response_timeout_ms = own.response_timeout_ms;
+  d->timing.reconnect_timeout_ms = own.reconnect_timeout_ms;
+  d->soft_limits = SoftLimits{};
+  d->soft_limits.x_min_mm = x ? bench.soft_limits.x_min_mm : bench.soft_limits.y_min_mm;
+  d->soft_limits.x_max_mm = x ? bench.soft_limits.x_max_mm : bench.soft_limits.y_max_mm;
+  d->home_x_mm = x ? bench.home_x_mm : bench.home_y_mm;
+  d->home_y_mm = 0;
+}
+
 DriveProfile read_profile(const config::Document& file) {
   config::Table root = file.root();
   DriveProfile p;
   p.source = file.source();
   p.name = root.string("name", "the profile's name, a string");
-  read_link(root.table("link"), &p);
-  read_units(root.table("units"), &p);
-  read_registers(root.table("registers"), &p.registers);
-  read_status_bits(root.table("status_bits"), &p.status_bits);
-  read_commands(root.table("commands"), &p.commands);
+  const bool two_drives = root.has("x") || root.has("y");
+  std::shared_ptr<AxisDrives> drives;
+  if (two_drives) {
+    drives = std::make_shared<AxisDrives>();
+    drives->x = read_axis_drive(root.table("x"), 'x');
+    drives->y = read_axis_drive(root.table("y"), 'y');
+  } else {
+    read_drive_tables(root, &p);
+  }
   read_motion(root.table("motion"), &p);
   read_soft_limits(root.table("soft_limits"), &p.soft_limits);
-  read_handshake(root.optional_table("handshake"), &p.protocol);
-  read_alarms(root.optional_table("alarms"), &p.alarm_meanings);
+  if (!two_drives) read_drive_options(root, &p);
   root.ignore("sim");  // the simulated bench's own table (sim/bench/config.hpp)
-  root.reject_unknown();
+  if (two_drives) {
+    root.reject_unknown(
+        "name, [x], [y], [motion] and [soft_limits] (a bench of two single-axis drives: each "
+        "drive's [link], [units], [registers], [status_bits], [commands], [handshake] and "
+        "[alarms] go inside its [x] or [y] table)");
+    for (AxisDrive* d : {&drives->x, &drives->y})
+      share_bench_motion(p, &d->drive);
+    // The bench's own link fields: the slower of the two drives'.
+    p.timing.response_timeout_ms = std::max(drives->x.drive.timing.response_timeout_ms,
+                                            drives->y.drive.timing.response_timeout_ms);
+    p.timing.reconnect_timeout_ms = std::max(drives->x.drive.timing.reconnect_timeout_ms,
+                                             drives->y.drive.timing.reconnect_timeout_ms);
+    p.axis_drives = std::move(drives);
+  } else {
+    root.reject_unknown();
+  }
   validate(p);
   return p;
 }

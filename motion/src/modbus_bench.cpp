@@ -44,13 +44,29 @@ ModbusBench::ModbusBench(const BenchUrl& url, DriveProfile profile)
       speed_mm_s_(profile_.default_speed_mm_s) {
   const RegisterMap& r = profile_.registers;
   const int w = profile_.position_registers();
-  const int first = std::min({r.actual_x, r.actual_y, r.status, r.alarm});
-  const int last = std::max({r.actual_x + w - 1, r.actual_y + w - 1, r.status, r.alarm});
+  // A single-axis drive has no second read-back: its actual_x stands in.
+  const int actual_y = profile_.single_axis() ? r.actual_x : r.actual_y;
+  // Without a second status register, status stands in for it.
+  const int moving = r.moving_status >= 0 ? r.moving_status : r.status;
+  const int first = std::min({r.actual_x, actual_y, r.status, r.alarm, moving});
+  const int last = std::max({r.actual_x + w - 1, actual_y + w - 1, r.status, r.alarm, moving});
   if (last - first + 1 <= kMaxReadRegisters) {
     feedback_first_ = first;
     feedback_count_ = last - first + 1;
   }
   reconnect("connect", /*first=*/true);
+}
+
+std::string ModbusBench::where() const {
+  std::string w = "bench " + link_.url().str();
+  if (profile_.single_axis())
+    w += std::string(" (") + (profile_.axis == 'x' ? "X" : "Y") + " axis drive)";
+  return w;
+}
+
+std::string ModbusBench::at(const XY& p) const {
+  if (profile_.single_axis()) return fmt_mm(p.x_mm) + " mm";
+  return "(" + fmt_mm(p.x_mm) + ", " + fmt_mm(p.y_mm) + ") mm";
 }
 
 void ModbusBench::reconnect(const char* what, bool first) {
@@ -73,7 +89,7 @@ void ModbusBench::reconnect(const char* what, bool first) {
       if (err == 0) return;
     }
     if (!ModbusLink::is_link_error(err)) {
-      throw BenchError("bench " + link_.url().str() + ": reading the bench state after " + what +
+      throw BenchError(where() + ": reading the bench state after " + what +
                        " failed: " + ModbusLink::describe(err) +
                        " (do the profile's registers exist on this drive?)");
     }
@@ -86,10 +102,9 @@ void ModbusBench::reconnect(const char* what, bool first) {
 }
 
 std::string ModbusBench::link_down_message(const char* what, bool first, int err) const {
-  const BenchUrl& url = link_.url();
   const std::string window =
       "link.reconnect_timeout_ms = " + std::to_string(profile_.timing.reconnect_timeout_ms) + " ms";
-  std::string msg = "bench " + url.str() + ": ";
+  std::string msg = where() + ": ";
   msg += first ? "cannot connect (tried for " + window + ")"
                : std::string("link down during ") + what + ", not re-established within " + window;
   msg += ": " + ModbusLink::describe(err) + ": " + link_hint(err);
@@ -129,6 +144,14 @@ std::string ModbusBench::link_hint(int err) const {
                      ": check the drive's unit id (link.unit_id or ?unit=), that baud, parity and "
                      "stop bits match the drive's serial settings, and the wiring (A/B swapped?)";
   }
+  if (err == EMBBADSLAVE && !tcp) {
+    const std::optional<int> other = link_.foreign_unit();
+    return "the answer came from " +
+           (other ? "unit " + std::to_string(*other) : std::string("another unit")) +
+           ", not from unit " + unit +
+           " that was asked, and is refused: is link.unit_id (or the URL's ?unit=) the drive's "
+           "station address, and does no other device on the line answer for it?";
+  }
   if (err == EMBBADCRC || err == EMBBADDATA || err == EMBBADSLAVE) {
     return tcp ? "the answers are not the drive's Modbus: is this port a Modbus TCP server?"
                : "garbled answers: baud, parity or stop bits of the URL differ from the drive's, "
@@ -140,20 +163,20 @@ std::string ModbusBench::link_hint(int err) const {
 
 int ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
   if (s.alarm) {
-    throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
-                         " (" + s.alarm_meaning + ") found after reconnect",
+    throw BenchFault(where() + ": alarm " + std::to_string(s.alarm_code) + " (" + s.alarm_meaning +
+                         ") found after reconnect",
                      s.alarm_code, s.alarm_meaning);
   }
   if (homed_seen_ && !s.homed) {
     pending_ = Pending::kNone;
-    throw BenchLinkError("bench " + link_.url().str() +
+    throw BenchLinkError(where() +
                          ": after reconnect the bench is no longer homed (drive restarted?); "
                          "its position is unknown: home it before moving");
   }
   if (s.homed) homed_seen_ = true;
   if (pending_ == Pending::kHome && !s.homed && !s.moving) {
     pending_ = Pending::kNone;
-    throw BenchLinkError("bench " + link_.url().str() +
+    throw BenchLinkError(where() +
                          ": after reconnect the bench is neither homing nor homed (drive "
                          "restarted?): home it again");
   }
@@ -162,8 +185,7 @@ int ModbusBench::check_state_after_reconnect(const BenchStatus& s) {
     if (const int err = read_targets(counts); err != 0) return err;
     if (counts != target_counts_) {
       pending_ = Pending::kNone;
-      throw BenchLinkError("bench " + link_.url().str() +
-                           ": after reconnect the target registers hold (" +
+      throw BenchLinkError(where() + ": after reconnect the target registers hold (" +
                            std::to_string(counts[0]) + ", " + std::to_string(counts[1]) +
                            ") counts, not the commanded (" + std::to_string(target_counts_[0]) +
                            ", " + std::to_string(target_counts_[1]) + "): drive restarted?");
@@ -180,17 +202,15 @@ int ModbusBench::transact(const char* what, Op op) {
     if (!link_.connected()) {
       reconnect(what, /*first=*/false);
       ++reconnects_;
-      spdlog::warn("bench {}: link re-established during {}; state re-read, resuming",
-                   link_.url().str(), what);
+      spdlog::warn("{}: link re-established during {}; state re-read, resuming", where(), what);
     }
     const int err = op();
     if (err == 0 || !ModbusLink::is_link_error(err)) return err;
-    spdlog::warn("bench {}: link failed during {}: {} (attempt {} of {})", link_.url().str(), what,
+    spdlog::warn("{}: link failed during {}: {} (attempt {} of {})", where(), what,
                  ModbusLink::describe(err), attempt, kMaxAttempts);
     link_.close();
     if (attempt == kMaxAttempts) {
-      throw BenchLinkError("bench " + link_.url().str() + ": " + what + " failed " +
-                           std::to_string(kMaxAttempts) +
+      throw BenchLinkError(where() + ": " + what + " failed " + std::to_string(kMaxAttempts) +
                            " times in a row: " + ModbusLink::describe(err));
     }
   }
@@ -201,12 +221,15 @@ BenchStatus ModbusBench::decode_feedback(const std::uint16_t* block, int first) 
   const StatusBits& b = profile_.status_bits;
   BenchStatus s;
   s.position.x_mm = profile_.to_mm(profile_.decode_position(block + (r.actual_x - first)));
-  s.position.y_mm = profile_.to_mm(profile_.decode_position(block + (r.actual_y - first)));
+  if (!profile_.single_axis()) {
+    s.position.y_mm = profile_.to_mm(profile_.decode_position(block + (r.actual_y - first)));
+  }
   const std::uint16_t bits = block[r.status - first];
   s.status_word = bits;
   auto bit = [bits](int n) { return ((bits >> n) & 1u) != 0; };
   s.homed = bit(b.homed);
-  s.moving = bit(b.moving);
+  s.moving = r.moving_status >= 0 ? ((block[r.moving_status - first] >> b.moving) & 1u) != 0
+                                  : bit(b.moving);
   s.in_position = bit(b.in_position);
   s.alarm = bit(b.alarm);
   s.emergency_stop = bit(b.emergency_stop);
@@ -226,8 +249,12 @@ int ModbusBench::read_feedback(BenchStatus& out) {
   // Scattered map: one read per field, assembled into a block indexed from 0.
   std::vector<std::uint16_t> block(65537, 0);
   const int w = profile_.position_registers();
-  for (auto [addr, n] :
-       {std::pair<int, int>{r.actual_x, w}, {r.actual_y, w}, {r.status, 1}, {r.alarm, 1}}) {
+  const int actual_y = profile_.single_axis() ? r.actual_x : r.actual_y;
+  for (auto [addr, n] : {std::pair<int, int>{r.actual_x, w},
+                         {actual_y, w},
+                         {r.status, 1},
+                         {r.alarm, 1},
+                         {r.moving_status >= 0 ? r.moving_status : r.status, 1}}) {
     if (const int err = link_.read(r.feedback, addr, n, block.data() + addr); err != 0) return err;
   }
   out = decode_feedback(block.data(), 0);
@@ -237,10 +264,12 @@ int ModbusBench::read_feedback(BenchStatus& out) {
 int ModbusBench::read_targets(std::array<std::int32_t, 2>& counts) {
   const RegisterMap& r = profile_.registers;
   const int w = profile_.position_registers();
-  std::uint16_t x[2], y[2];
+  std::uint16_t x[2], y[2] = {0, 0};
   if (int err = link_.read(RegisterTable::kHolding, r.target_x, w, x); err != 0) return err;
-  if (int err = link_.read(RegisterTable::kHolding, r.target_y, w, y); err != 0) return err;
-  counts = {profile_.decode_position(x), profile_.decode_position(y)};
+  if (!profile_.single_axis()) {
+    if (int err = link_.read(RegisterTable::kHolding, r.target_y, w, y); err != 0) return err;
+  }
+  counts = {profile_.decode_position(x), profile_.single_axis() ? 0 : profile_.decode_position(y)};
   return 0;
 }
 
@@ -268,12 +297,12 @@ void ModbusBench::write_verified(const char* what, const std::map<int, std::uint
     const std::string range =
         "holding registers " + std::to_string(addr) + ".." + std::to_string(addr + n - 1);
     if (err != 0) {
-      throw BenchWriteError("bench " + link_.url().str() + ": " + what + ": the drive refused " +
-                            range + ": " + ModbusLink::describe(err));
+      throw BenchWriteError(where() + ": " + what + ": the drive refused " + range + ": " +
+                            ModbusLink::describe(err));
     }
     if (back != regs) {
       std::ostringstream msg;
-      msg << "bench " << link_.url().str() << ": " << what << ": " << range << " read back [";
+      msg << where() << ": " << what << ": " << range << " read back [";
       for (int i = 0; i < n; ++i)
         msg << (i ? " " : "") << back[i];
       msg << "] after writing [";
@@ -306,7 +335,7 @@ void ModbusBench::ensure_servo_on(const char* what) {
     if (s.alarm || Clock::now() >= deadline) {
       servo_enabled_ = false;
       throw BenchWriteError(
-          "bench " + link_.url().str() + ": " + what + ": servo not on (status bit " +
+          where() + ": " + what + ": servo not on (status bit " +
           std::to_string(h.servo_ready_bit) + " = handshake.servo_ready_bit still 0) " +
           (s.alarm ? "and alarm " + std::to_string(s.alarm_code) + " (" + s.alarm_meaning + ")"
                    : "within handshake.accept_timeout_ms = " + std::to_string(h.accept_timeout_ms) +
@@ -322,9 +351,8 @@ void ModbusBench::ensure_servo_on(const char* what) {
 void ModbusBench::write_unverified(const char* what, int address, std::uint16_t value) {
   const int err = transact(what, [&] { return link_.write(address, 1, &value); });
   if (err != 0) {
-    throw BenchWriteError("bench " + link_.url().str() + ": " + what + ": the drive refused " +
-                          "holding register " + std::to_string(address) + ": " +
-                          ModbusLink::describe(err));
+    throw BenchWriteError(where() + ": " + what + ": the drive refused " + "holding register " +
+                          std::to_string(address) + ": " + ModbusLink::describe(err));
   }
 }
 
@@ -368,11 +396,11 @@ void ModbusBench::command(const char* what, std::uint16_t code, Acceptance kind,
       if (accepted(kind, before, s, target)) return;
       if (Clock::now() >= deadline) {
         throw BenchWriteError(
-            "bench " + link_.url().str() + ": " + what + ": the drive did not take command " +
-            std::to_string(word) + " within handshake.accept_timeout_ms = " +
-            std::to_string(h.accept_timeout_ms) + " ms (the status shows no sign of it: moving " +
-            std::to_string(s.moving) + ", in position " + std::to_string(s.in_position) +
-            ", homed " + std::to_string(s.homed) + ")");
+            where() + ": " + what + ": the drive did not take command " + std::to_string(word) +
+            " within handshake.accept_timeout_ms = " + std::to_string(h.accept_timeout_ms) +
+            " ms (the status shows no sign of it: moving " + std::to_string(s.moving) +
+            ", in position " + std::to_string(s.in_position) + ", homed " +
+            std::to_string(s.homed) + ")");
       }
       std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
     }
@@ -387,9 +415,8 @@ void ModbusBench::command(const char* what, std::uint16_t code, Acceptance kind,
       if (((s.status_word >> h.ack_bit) & 1u) || s.alarm) break;
       if (Clock::now() >= deadline) {
         write_verified(what, {{reg, held_bits()}});
-        throw BenchWriteError("bench " + link_.url().str() + ": " + what +
-                              ": the drive did not acknowledge command " + std::to_string(word) +
-                              " (status bit " + std::to_string(h.ack_bit) +
+        throw BenchWriteError(where() + ": " + what + ": the drive did not acknowledge command " +
+                              std::to_string(word) + " (status bit " + std::to_string(h.ack_bit) +
                               " = handshake.ack_bit) within handshake.accept_timeout_ms = " +
                               std::to_string(h.accept_timeout_ms) + " ms");
       }
@@ -418,7 +445,11 @@ void ModbusBench::set_speed(double speed_mm_s) {
 
 void ModbusBench::move_to(double x_mm, double y_mm) {
   const SoftLimits& lim = profile_.soft_limits;
-  if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !lim.contains(x_mm, y_mm)) {
+  // A single-axis drive moves its own axis, given as x_mm; y_mm is not used.
+  if (profile_.single_axis()) y_mm = 0;
+  const bool inside = profile_.single_axis() ? x_mm >= lim.x_min_mm && x_mm <= lim.x_max_mm
+                                             : lim.contains(x_mm, y_mm);
+  if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !inside) {
     throw SoftLimitError("move to (" + fmt_mm(x_mm) + ", " + fmt_mm(y_mm) +
                          ") mm refused, nothing sent: outside the soft limits x [" +
                          fmt_mm(lim.x_min_mm) + ", " + fmt_mm(lim.x_max_mm) + "], y [" +
@@ -435,15 +466,17 @@ void ModbusBench::move_to(double x_mm, double y_mm) {
       c = static_cast<std::int32_t>(std::ceil(lo * profile_.counts_per_mm));
     return c;
   };
-  const std::array<std::int32_t, 2> counts = {quantize(x_mm, lim.x_min_mm, lim.x_max_mm),
-                                              quantize(y_mm, lim.y_min_mm, lim.y_max_mm)};
+  const std::array<std::int32_t, 2> counts = {
+      quantize(x_mm, lim.x_min_mm, lim.x_max_mm),
+      profile_.single_axis() ? 0 : quantize(y_mm, lim.y_min_mm, lim.y_max_mm)};
 
   const RegisterMap& r = profile_.registers;
   std::map<int, std::uint16_t> regs;
   const int w = profile_.position_registers();
   std::uint16_t words[2];
-  for (auto [addr, c] :
-       {std::pair<int, std::int32_t>{r.target_x, counts[0]}, {r.target_y, counts[1]}}) {
+  std::vector<std::pair<int, std::int32_t>> targets = {{r.target_x, counts[0]}};
+  if (!profile_.single_axis()) targets.push_back({r.target_y, counts[1]});
+  for (auto [addr, c] : targets) {
     profile_.encode_position(c, words);
     for (int i = 0; i < w; ++i)
       regs[addr + i] = words[i];
@@ -495,8 +528,8 @@ void ModbusBench::reset_alarm() {
   }
   const BenchStatus s = status();
   if (s.alarm) {
-    throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
-                         " (" + s.alarm_meaning + ") persists after reset",
+    throw BenchFault(where() + ": alarm " + std::to_string(s.alarm_code) + " (" + s.alarm_meaning +
+                         ") persists after reset",
                      s.alarm_code, s.alarm_meaning);
   }
 }
@@ -505,8 +538,8 @@ BenchStatus ModbusBench::status() {
   BenchStatus s;
   const int err = transact("status", [&] { return read_feedback(s); });
   if (err != 0) {
-    throw BenchError("bench " + link_.url().str() + ": reading the status failed: " +
-                     ModbusLink::describe(err) + " (check registers.* of " + profile_.source + ")");
+    throw BenchError(where() + ": reading the status failed: " + ModbusLink::describe(err) +
+                     " (check registers.* of " + profile_.source + ")");
   }
   if (s.homed) homed_seen_ = true;
   return s;
@@ -516,53 +549,60 @@ XY ModbusBench::position() {
   return status().position;
 }
 
+BenchStatus ModbusBench::checked_status() {
+  const BenchStatus s = status();
+  if (s.alarm) {
+    pending_ = Pending::kNone;
+    throw BenchFault(where() + ": alarm " + std::to_string(s.alarm_code) + " (" + s.alarm_meaning +
+                         ") at " + at(s.position),
+                     s.alarm_code, s.alarm_meaning);
+  }
+  if (s.emergency_stop) {
+    pending_ = Pending::kNone;
+    throw BenchFault(where() + ": emergency stop at " + at(s.position), s.alarm_code,
+                     s.alarm_code ? s.alarm_meaning : "emergency stop");
+  }
+  return s;
+}
+
+bool ModbusBench::on_target(const BenchStatus& s) const {
+  // A read-back within the tolerance, plus a hair (1 nm) for the mm <-> counts
+  // conversion in floating point.
+  const double tol = profile_.position_tolerance_mm + 1e-6;
+  bool ok = !s.moving;
+  if (pending_ != Pending::kStop && pending_ != Pending::kNone) ok = ok && s.in_position;
+  if (pending_ == Pending::kHome) ok = ok && s.homed;
+  if (target_mm_) {
+    ok = ok && std::fabs(s.position.x_mm - target_mm_->x_mm) <= tol &&
+         std::fabs(s.position.y_mm - target_mm_->y_mm) <= tol;
+  }
+  return ok;
+}
+
+std::string ModbusBench::describe_state(const BenchStatus& s) const {
+  std::ostringstream msg;
+  msg << "at " << at(s.position);
+  if (target_mm_) msg << ", target " << at(*target_mm_);
+  msg << ", moving " << s.moving << ", in position " << s.in_position << ", homed " << s.homed;
+  return msg.str();
+}
+
 BenchStatus ModbusBench::wait_settled(milliseconds timeout) {
   const auto start = Clock::now();
   const auto deadline = start + timeout;
   const auto settle_time = milliseconds(profile_.timing.settle_time_ms);
-  // A read-back within the tolerance, plus a hair (1 nm) for the mm <-> counts
-  // conversion in floating point.
-  const double tol = profile_.position_tolerance_mm + 1e-6;
   bool settling = false;
   Clock::time_point settled_since = start;
   for (;;) {
-    const BenchStatus s = status();
-    if (s.alarm) {
-      pending_ = Pending::kNone;
-      throw BenchFault("bench " + link_.url().str() + ": alarm " + std::to_string(s.alarm_code) +
-                           " (" + s.alarm_meaning + ") at (" + fmt_mm(s.position.x_mm) + ", " +
-                           fmt_mm(s.position.y_mm) + ") mm",
-                       s.alarm_code, s.alarm_meaning);
-    }
-    if (s.emergency_stop) {
-      pending_ = Pending::kNone;
-      throw BenchFault("bench " + link_.url().str() + ": emergency stop at (" +
-                           fmt_mm(s.position.x_mm) + ", " + fmt_mm(s.position.y_mm) + ") mm",
-                       s.alarm_code, s.alarm_code ? s.alarm_meaning : "emergency stop");
-    }
-    bool ok = !s.moving;
-    if (pending_ != Pending::kStop && pending_ != Pending::kNone) {
-      ok = ok && s.in_position;
-    }
-    if (pending_ == Pending::kHome) ok = ok && s.homed;
-    if (target_mm_) {
-      ok = ok && std::fabs(s.position.x_mm - target_mm_->x_mm) <= tol &&
-           std::fabs(s.position.y_mm - target_mm_->y_mm) <= tol;
-    }
+    const BenchStatus s = checked_status();
+    const bool ok = on_target(s);
     const auto now = Clock::now();
     if (ok && !settling) settled_since = now;
     settling = ok;
     if (ok && now - settled_since >= settle_time) return s;
     if (now >= deadline) {
-      std::ostringstream msg;
-      msg << "bench " << link_.url().str() << ": not settled after " << timeout.count()
-          << " ms: at (" << fmt_mm(s.position.x_mm) << ", " << fmt_mm(s.position.y_mm) << ") mm";
-      if (target_mm_) {
-        msg << ", target (" << fmt_mm(target_mm_->x_mm) << ", " << fmt_mm(target_mm_->y_mm)
-            << ") mm";
-      }
-      msg << ", moving " << s.moving << ", in position " << s.in_position << ", homed " << s.homed;
-      throw BenchTimeout(msg.str());
+      throw BenchTimeout(where() + ": not settled after " + std::to_string(timeout.count()) +
+                         " ms: " + describe_state(s));
     }
     std::this_thread::sleep_for(milliseconds(profile_.timing.poll_interval_ms));
   }

@@ -4,13 +4,23 @@
 #include <modbus/modbus.h>
 
 #include <cerrno>
+#include <thread>
 
 #include "motion/errors.hpp"
 
 namespace motion {
 
+std::chrono::microseconds ModbusLink::frame_silence(const BenchUrl& url) {
+  if (url.transport != BenchUrl::Transport::kRtu) return std::chrono::microseconds(0);
+  if (url.baud > 19200) return std::chrono::microseconds(1750);
+  const int char_bits = 1 + url.data_bits + (url.parity == 'N' ? 0 : 1) + url.stop_bits;
+  // 3.5 characters of char_bits bits at `baud` bits per second, rounded up.
+  const long long us = (35LL * char_bits * 1000000 + 10LL * url.baud - 1) / (10LL * url.baud);
+  return std::chrono::microseconds(us);
+}
+
 ModbusLink::ModbusLink(const BenchUrl& url, int unit_id, std::chrono::milliseconds timeout)
-    : url_(url) {
+    : url_(url), unit_id_(unit_id), silence_(frame_silence(url)) {
   if (url.transport == BenchUrl::Transport::kTcp) {
     // _pi: resolves host names as well as addresses.
     ctx_ = modbus_new_tcp_pi(url.host.c_str(), std::to_string(url.port).c_str());
@@ -44,6 +54,8 @@ int ModbusLink::connect() {
   close();
   if (modbus_connect(ctx_) == -1) return errno;
   connected_ = true;
+  // A line just opened may carry the end of a frame: a silent interval first.
+  last_frame_end_ = std::chrono::steady_clock::now();
   return 0;
 }
 
@@ -52,15 +64,42 @@ void ModbusLink::close() {
   connected_ = false;
 }
 
+void ModbusLink::keep_silence() {
+  if (silence_.count() == 0) return;
+  const auto ready = last_frame_end_ + silence_;
+  if (std::chrono::steady_clock::now() < ready) std::this_thread::sleep_until(ready);
+}
+
+std::optional<int> ModbusLink::probe_answering_unit() {
+  // Read holding register 0 (function 03): any answer carries its unit id.
+  const std::uint8_t request[] = {static_cast<std::uint8_t>(unit_id_), 0x03, 0, 0, 0, 1};
+  keep_silence();
+  std::optional<int> unit;
+  if (modbus_send_raw_request(ctx_, request, sizeof request) != -1) {
+    std::uint8_t answer[MODBUS_RTU_MAX_ADU_LENGTH] = {};
+    // libmodbus reads the whole frame, then refuses it for its unit id
+    // (return 0 or -1); the frame's first byte is the unit that answered.
+    modbus_receive_confirmation(ctx_, answer);
+    if (answer[0] != 0 && answer[0] != unit_id_) unit = answer[0];
+  }
+  last_frame_end_ = std::chrono::steady_clock::now();
+  return unit;
+}
+
 int ModbusLink::finish(int rc) {
+  last_frame_end_ = std::chrono::steady_clock::now();
   if (rc != -1) return 0;
   const int err = errno;
+  if (err == EMBBADSLAVE && url_.transport == BenchUrl::Transport::kRtu) {
+    foreign_unit_ = probe_answering_unit();
+  }
   if (is_link_error(err)) close();
   return err;
 }
 
 int ModbusLink::read(RegisterTable table, int address, int count, std::uint16_t* out) {
   if (!connected_) return ENOTCONN;
+  keep_silence();
   const int rc = table == RegisterTable::kInput
                      ? modbus_read_input_registers(ctx_, address, count, out)
                      : modbus_read_registers(ctx_, address, count, out);
@@ -71,6 +110,7 @@ int ModbusLink::write(int address, int count, const std::uint16_t* values) {
   if (!connected_) return ENOTCONN;
   // Function 06 for one register, 16 for several: some drives accept only 06
   // on command registers.
+  keep_silence();
   const int rc = count == 1 ? modbus_write_register(ctx_, address, values[0])
                             : modbus_write_registers(ctx_, address, count, values);
   return finish(rc);

@@ -56,6 +56,9 @@ class ChildProcess {
   ChildProcess(const ChildProcess&) = delete;
   ChildProcess& operator=(const ChildProcess&) = delete;
 
+  // Sends `sig` (a fault the child injects on a signal, e.g. SIGUSR1).
+  void signal(int sig) { kill(pid_, sig); }
+
   // Sends `sig` and waits up to `timeout` for the child to exit. Returns its
   // exit status (128 + signal if a signal killed it), or nothing if it is
   // still running.

@@ -52,8 +52,10 @@ struct SweepFileOptions {
 class SimRig {
  public:
   // time_scale: simulated seconds per wall second of the bench's motion
-  // (the camera still exposes in real time).
-  explicit SimRig(double time_scale = 4.0)
+  // (the camera still exposes in real time). rtu_device, when given: the bench
+  // serves Modbus RTU on that serial device (one end of a socat pty pair)
+  // instead of TCP; then set_bench_url names the other end for the sweep file.
+  explicit SimRig(double time_scale = 4.0, const std::string& rtu_device = "")
       : dir_(std::filesystem::temp_directory_path() /
              ("rig_sweep_" + std::to_string(::getpid()) + "_" + std::to_string(counter()++))),
         geometry_(vision::RigGeometry::load(repo_path("config/rigs/sim.toml"))) {
@@ -62,8 +64,10 @@ class SimRig {
     sim::bench::BenchSimConfig sim_config =
         sim::bench::load_bench_sim_config(repo_path("config/benches/sim.toml"));
     sim_config.time_scale = time_scale;
+    sim::bench::BenchServerOptions server;
+    server.rtu_device = rtu_device;
     bench_ = std::make_unique<sim::bench::BenchServer>(
-        motion::load_drive_profile(repo_path("config/benches/sim.toml")), sim_config);
+        motion::load_drive_profile(repo_path("config/benches/sim.toml")), sim_config, server);
     bench_->start();
     auto renderer = std::make_shared<const sim::scene::SceneRenderer>(
         vision::Camera::paper_default(),
@@ -82,6 +86,8 @@ class SimRig {
   }
 
   sim::bench::BenchServer& bench() { return *bench_; }
+  // The bench URL write_sweep writes; default: the bench's TCP address.
+  void set_bench_url(const std::string& url) { bench_url_ = url; }
   sim::camera::CameraServer& camera() { return *camera_; }
   const vision::RigGeometry& geometry() const { return geometry_; }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
@@ -93,7 +99,9 @@ class SimRig {
     out << "[plan]\n"
         << o.plan << "\n[capture]\ncamera = \"gige:127.0.0.1\"\ncalibration = \"" << o.calibration
         << "\"\nframes_per_position = " << o.frames << "\n"
-        << o.extra_capture << "\n[bench]\nurl = \"modbus-tcp://127.0.0.1:" << bench_->port()
+        << o.extra_capture << "\n[bench]\nurl = \""
+        << (bench_url_.empty() ? "modbus-tcp://127.0.0.1:" + std::to_string(bench_->port())
+                               : bench_url_)
         << "\"\nprofile = \"" << repo_path("config/benches/sim.toml")
         << "\"\nspeed_mm_s = 100\n\n[faults]\non_alarm = \"" << o.on_alarm
         << "\"\nmax_consecutive_failed = " << o.max_consecutive_failed << "\n"
@@ -111,6 +119,7 @@ class SimRig {
     return n;
   }
   std::filesystem::path dir_;
+  std::string bench_url_;
   vision::RigGeometry geometry_;
   std::unique_ptr<sim::bench::BenchServer> bench_;
   std::unique_ptr<sim::camera::CameraServer> camera_;

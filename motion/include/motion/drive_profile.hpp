@@ -1,7 +1,8 @@
 // motion::DriveProfile: everything ModbusBench knows about a drive, read from a
 // TOML file (config/benches/*.toml), never from code. The default map of the
 // simulated bench is docs/register-map.md and ships as config/benches/sim.toml; a documented
-// template for a real drive is config/benches/template_real_drive.toml.
+// template for a real drive is config/benches/template_real_drive.toml, for two
+// single-axis drives config/benches/template_two_drives.toml.
 //
 // Registers are 0-based PDU addresses (Modbus "40001" = holding address 0).
 // Positions are signed 32-bit two's complement counts in two consecutive
@@ -16,8 +17,12 @@
 
 #include <cstdint>
 #include <map>
+#include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
+
+#include "motion/bench_url.hpp"
 
 namespace motion {
 
@@ -43,6 +48,10 @@ struct RegisterMap {
   int actual_y = 2;  // first of 2 registers, int32 counts
   int status = 4;    // 1 register of status bits (see StatusBits)
   int alarm = 5;     // 1 register, alarm code (0 = none)
+  // Optional (-1: none): a second status register, in the feedback table,
+  // holding the moving bit (status_bits.moving) when the drive keeps it apart
+  // from the others (IAI: MOVE in DSSE 9007h, PEND and HEND in DSS1 9005h).
+  int moving_status = -1;
 };
 
 // Bit positions (0..15) in the status register.
@@ -127,10 +136,23 @@ struct CommandProtocol {
   bool reset_pulse = false;
 };
 
+struct AxisDrives;
+
 struct DriveProfile {
   std::string name;    // free text, for logs
   std::string source;  // file it was read from (for messages)
-  int unit_id = 1;     // Modbus unit (slave) id, 1..247, or 255 for TCP
+  // 0: a controller of both axes (target_x/y, actual_x/y). 'x' or 'y': a
+  // single-axis drive, one axis of a bench of two drives (AxisDrives): only
+  // target_x, actual_x, the soft limits x_min_mm/x_max_mm and home_x_mm are
+  // used, and they describe this drive's axis; messages name it ("Y axis
+  // drive") and its fields ("y.registers.target").
+  char axis = 0;
+  // Set on the profile of a bench of two single-axis drives (a file with
+  // [x] and [y] tables): the bench's own fields here (name, [motion],
+  // [soft_limits]) are shared; the drives' are in *axis_drives. Null for a
+  // single controller.
+  std::shared_ptr<const AxisDrives> axis_drives;
+  int unit_id = 1;  // Modbus unit (slave) id, 1..247, or 255 for TCP
   WordOrder word_order = WordOrder::kHighFirst;
   double counts_per_mm = 1000;  // position register units per mm (1000 = µm)
   // Width of a position register value: 32 (two registers, word_order) or 16
@@ -151,6 +173,7 @@ struct DriveProfile {
   std::map<int, std::string> alarm_meanings;  // code -> meaning
   CommandProtocol protocol;
 
+  bool single_axis() const { return axis != 0; }
   // Registers one position takes: 2 for 32-bit values, 1 for 16-bit ones.
   int position_registers() const { return position_bits == 16 ? 1 : 2; }
   // A position's counts as its registers (position_registers() of them);
@@ -166,12 +189,25 @@ struct DriveProfile {
   std::string alarm_meaning(int code) const;
 };
 
+// One axis of a bench of two single-axis drives: its drive and, when the
+// drive has a link of its own (`url` in its table), that link. Without one,
+// the drive is reached at the bench URL with its own link.unit_id.
+struct AxisDrive {
+  DriveProfile drive;  // drive.axis is 'x' or 'y'
+  std::optional<BenchUrl> url;
+};
+
+struct AxisDrives {
+  AxisDrive x, y;
+};
+
 // Reads and validates a profile file (config/reader.hpp: a regular file of at
-// most 1 MiB). Throws ProfileError "FILE: TABLE.KEY = VALUE: [PROBLEM; ]expected
-// WHAT". The top-level [sim] table is the simulated bench's (sim/bench/config.hpp)
-// and is not read here; any other unknown key or table, at the top or inside
-// the profile's tables, is refused, so a typo never silently falls back to a
-// default.
+// most 1 MiB): one controller of both axes ([link], [registers], ...), or two
+// single-axis drives ([x] and [y] tables, each with its own [link],
+// [registers], ..., sharing [motion] and [soft_limits]; docs/drive-profile.md). Throws ProfileError
+// "FILE: TABLE.KEY = VALUE: [PROBLEM; ]expected WHAT". The top-level [sim] table is the simulated
+// bench's (sim/bench/config.hpp) and is not read here; any other unknown key or table, at the top
+// or inside the profile's tables, is refused, so a typo never silently falls back to a default.
 DriveProfile load_drive_profile(const std::string& path);
 // The same for TOML text read from `source` (named in messages).
 DriveProfile parse_drive_profile(std::string_view toml_text, const std::string& source);

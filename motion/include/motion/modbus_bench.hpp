@@ -1,5 +1,7 @@
 // motion::ModbusBench: a Bench driven over Modbus (TCP or RTU) by a
-// DriveProfile. Everything drive-specific (addresses, word order, units, bits,
+// DriveProfile: one controller of both axes, or (profile.axis 'x' or 'y') one
+// single-axis drive, whose axis it reports as x_mm (y_mm is 0) and moves with
+// move_to(mm, any). Everything drive-specific (addresses, word order, units, bits,
 // command codes, timeouts, alarm texts, soft limits) comes from the profile.
 //
 // Guarantees:
@@ -39,11 +41,12 @@
 #include "motion/bench.hpp"
 #include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
+#include "motion/driven_bench.hpp"
 #include "motion/modbus_link.hpp"
 
 namespace motion {
 
-class ModbusBench : public Bench {
+class ModbusBench : public DrivenBench {
  public:
   // Connects (with the reconnect watchdog) and reads the status once. Throws
   // BenchLinkError if the drive cannot be reached within the profile's
@@ -61,11 +64,24 @@ class ModbusBench : public Bench {
   // Speed written with every following move, mm/s. Throws SoftLimitError if
   // not in (0, profile.max_speed_mm_s] (NaN included) or if it rounds to 0 in
   // the drive's units (profile.speed_units_per_mm_s).
-  void set_speed(double speed_mm_s);
+  void set_speed(double speed_mm_s) override;
 
-  const DriveProfile& profile() const { return profile_; }
+  const DriveProfile& profile() const override { return profile_; }
   // How many times the watchdog has re-established the link (for logs, tests).
-  int reconnects() const { return reconnects_; }
+  int reconnects() const override { return reconnects_; }
+
+  // The steps of wait_settled, for a bench that waits on several drives
+  // (TwoDriveBench). checked_status: the status, or BenchFault on an alarm or
+  // emergency stop. on_target: whether `s` shows the drive where its last
+  // command takes it (not moving, in position, at the target, homed after
+  // home()), before the settle time. describe_state: `s` and the target, for
+  // a timeout's message.
+  BenchStatus checked_status();
+  bool on_target(const BenchStatus& s) const;
+  std::string describe_state(const BenchStatus& s) const;
+  // "bench URL", with " (X axis drive)" for a single-axis drive: how every
+  // message of this bench begins.
+  std::string where() const;
 
  private:
   enum class Pending { kNone, kMove, kHome, kStop };
@@ -105,6 +121,8 @@ class ModbusBench : public Bench {
   // The bits kept set in every command: the servo-on once it was written.
   std::uint16_t held_bits() const;
   BenchStatus decode_feedback(const std::uint16_t* block, int first) const;
+  // A position as messages print it: "(x, y) mm", or "x mm" for one axis.
+  std::string at(const XY& p) const;
 
   DriveProfile profile_;
   ModbusLink link_;

@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 #include "motion/bench_url.hpp"
@@ -47,12 +48,36 @@ class ModbusLink {
 
   const BenchUrl& url() const { return url_; }
 
+  // RTU: the silent interval that must separate two frames on the line, 3.5
+  // character times at the URL's baud rate, parity and stop bits (a
+  // character is 1 start, data, parity and stop bits), and 1750 us above
+  // 19200 baud ("MODBUS over serial line specification and implementation
+  // guide V1.02", section 2.5.1.1). Every request is sent at least this long
+  // after the end of the last frame the link saw (the answer, or a request
+  // that went unanswered). Zero for TCP.
+  static std::chrono::microseconds frame_silence(const BenchUrl& url);
+
+  // RTU, after a read or write failed with EMBBADSLAVE: the unit id that
+  // answered instead of the one asked, when a second request showed it.
+  std::optional<int> foreign_unit() const { return foreign_unit_; }
+  int unit_id() const { return unit_id_; }
+
  private:
   int finish(int rc);
+  // Sleeps until frame_silence() has passed since the last frame ended.
+  void keep_silence();
+  // Asks the unit once more with a raw request and returns the unit id the
+  // answer carries, if it is another one (libmodbus reports only that it
+  // differs).
+  std::optional<int> probe_answering_unit();
 
   BenchUrl url_;
+  int unit_id_;
   modbus_t* ctx_ = nullptr;
   bool connected_ = false;
+  std::chrono::microseconds silence_{0};
+  std::chrono::steady_clock::time_point last_frame_end_{};
+  std::optional<int> foreign_unit_;
 };
 
 }  // namespace motion

@@ -10,7 +10,7 @@
 #include "commands.hpp"
 #include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
-#include "motion/modbus_bench.hpp"
+#include "motion/driven_bench.hpp"
 
 namespace rig::cli {
 namespace {
@@ -37,16 +37,16 @@ void print(const motion::BenchStatus& s) {
 template <class Action>
 int with_bench(const BenchArgs& a, Action action) {
   return run_command("bench", [&] {
-    motion::ModbusBench bench(motion::BenchUrl::parse(a.url),
-                              motion::load_drive_profile(a.profile));
-    if (a.speed_mm_s) bench.set_speed(*a.speed_mm_s);  // refuses 0, negative, NaN (exit 2)
-    action(bench);
-    print(bench.status());
+    const std::unique_ptr<motion::DrivenBench> bench =
+        motion::open_bench(motion::BenchUrl::parse(a.url), motion::load_drive_profile(a.profile));
+    if (a.speed_mm_s) bench->set_speed(*a.speed_mm_s);  // refuses 0, negative, NaN (exit 2)
+    action(*bench);
+    print(bench->status());
     return kExitOk;
   });
 }
 
-std::chrono::milliseconds settle_timeout(const motion::ModbusBench& b) {
+std::chrono::milliseconds settle_timeout(const motion::DrivenBench& b) {
   return std::chrono::milliseconds(b.profile().timing.settle_timeout_ms);
 }
 
@@ -81,7 +81,7 @@ void add_bench_command(CLI::App& app, ExitStatus& status) {
   add_action(bench, "home", "Home the bench and wait until it is homed and still", "home " + where,
              args)
       ->callback([&status, args] {
-        status.code = with_bench(*args, [](motion::ModbusBench& b) {
+        status.code = with_bench(*args, [](motion::DrivenBench& b) {
           b.home();
           b.wait_settled(std::chrono::milliseconds(b.profile().timing.home_timeout_ms));
         });
@@ -93,7 +93,7 @@ void add_bench_command(CLI::App& app, ExitStatus& status) {
   move->add_option("Y", args->y_mm, "Target Y, mm")->required();
   move->add_option("--speed", args->speed_mm_s, "mm/s (default: the profile's)");
   move->callback([&status, args] {
-    status.code = with_bench(*args, [&](motion::ModbusBench& b) {
+    status.code = with_bench(*args, [&](motion::DrivenBench& b) {
       b.move_to(args->x_mm, args->y_mm);
       b.wait_settled(settle_timeout(b));
     });
@@ -107,7 +107,7 @@ void add_bench_command(CLI::App& app, ExitStatus& status) {
   jog->add_option("DY", args->y_mm, "Step along Y, mm")->required();
   jog->add_option("--speed", args->speed_mm_s, "mm/s (default: the profile's)");
   jog->callback([&status, args] {
-    status.code = with_bench(*args, [&](motion::ModbusBench& b) {
+    status.code = with_bench(*args, [&](motion::DrivenBench& b) {
       const motion::XY p = b.position();
       b.move_to(p.x_mm + args->x_mm, p.y_mm + args->y_mm);
       b.wait_settled(settle_timeout(b));
@@ -116,13 +116,13 @@ void add_bench_command(CLI::App& app, ExitStatus& status) {
 
   add_action(bench, "reset", "Clear a drive alarm (after fixing its cause)", "reset " + where, args)
       ->callback([&status, args] {
-        status.code = with_bench(*args, [](motion::ModbusBench& b) { b.reset_alarm(); });
+        status.code = with_bench(*args, [](motion::DrivenBench& b) { b.reset_alarm(); });
       });
 
   add_action(bench, "stop", "Stop the bench (decelerate) and wait until it stands still",
              "stop " + where, args)
       ->callback([&status, args] {
-        status.code = with_bench(*args, [](motion::ModbusBench& b) {
+        status.code = with_bench(*args, [](motion::DrivenBench& b) {
           b.stop();
           b.wait_settled(settle_timeout(b));
         });

@@ -23,7 +23,7 @@
 
 #include "commands.hpp"
 #include "db/store/store.hpp"
-#include "motion/modbus_bench.hpp"
+#include "motion/driven_bench.hpp"
 #include "rig/sweep/controller.hpp"
 #include "rig/sweep/run_start.hpp"
 #include "rig/sweep/sweep_camera.hpp"
@@ -133,7 +133,9 @@ int run_on_bench(const SweepArgs& args, const sweep::SweepConfig& config,
                   << "; asking again (a controller that died may hold the camera until its "
                   << "heartbeat expires)\n";
       });
-  motion::ModbusBench bench(config.bench_url, config.bench_profile);
+  const std::unique_ptr<motion::DrivenBench> driven =
+      motion::open_bench(config.bench_url, config.bench_profile);
+  motion::DrivenBench& bench = *driven;
   if (config.speed_mm_s) bench.set_speed(*config.speed_mm_s);
   db::store::Store store = sweep::open_run_database(database, config);
 

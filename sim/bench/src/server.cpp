@@ -40,6 +40,12 @@ BenchServer::BenchServer(motion::DriveProfile profile, BenchSimConfig config,
       faults_(config_.faults) {
   // The simulated drive keeps its command register and uses 32-bit positions
   // (docs/register-map.md); other conventions are emulated by the test drives.
+  if (profile_.axis_drives) {
+    throw motion::ProfileError(profile_.source +
+                               ": the simulated bench is one controller of both axes; expected a "
+                               "profile with [link] and [registers], not two drives in [x] and "
+                               "[y] (tests/motion/axis_drives.py emulates those)");
+  }
   if (profile_.position_bits != 32 ||
       profile_.protocol.handshake != motion::CommandHandshake::kKept ||
       profile_.protocol.servo_on != 0 || profile_.protocol.reset_pulse) {
