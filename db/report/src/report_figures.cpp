@@ -116,7 +116,10 @@ svg::Figure fit_figure(const ReportInput& in, const std::string& scope) {
                        false,
                        colour};
     f.series.push_back(solver_style(in.study, s.solver, points));
-    const auto [lo, hi] = std::minmax_element(s.plot_true_m.begin(), s.plot_true_m.end());
+    // Iterators, not a structured binding: C++17 lets no lambda capture one
+    // (gcc accepts it as an extension, clang refuses it).
+    const auto true_range = std::minmax_element(s.plot_true_m.begin(), s.plot_true_m.end());
+    const auto lo = true_range.first, hi = true_range.second;
     auto line = [&](const stats::LineFit& fit, bool dashed, const std::string& label) {
       svg::Series l;
       l.label = label;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <random>
+#include <utility>
 
 #include "config/reader.hpp"
 
@@ -243,7 +244,12 @@ RealismProfile load_realism_profile(const std::string& path) {
   read_target(root.optional_table("target"), &p);
   config::Table sensor = root.optional_table("sensor");
   read_colour_filter(sensor, &p);
-  read_scene(root.optional_table("light"), root.optional_table("optics"), sensor, &p.scene);
+  // Asked in this order, one statement each: as two arguments of one call
+  // their order would be the compiler's (gcc and clang differ), and with it
+  // the list of keys an unknown-key error names.
+  config::Table optics = root.optional_table("optics");
+  config::Table light = root.optional_table("light");
+  read_scene(std::move(light), std::move(optics), sensor, &p.scene);
   config::Table bench = root.optional_table("bench");
   p.bench_x = read_bench_axis(bench.optional_table("x"), &p.attitude.x);
   p.bench_y = read_bench_axis(bench.optional_table("y"), &p.attitude.y);

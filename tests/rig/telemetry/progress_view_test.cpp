@@ -217,9 +217,11 @@ TEST(ProgressView, LogLineOfAFailedPositionGivesTheReason) {
 TEST(ProgressView, LogLineSkipsEstimatesThatDidNotConverge) {
   rig::telemetry::ProgressView view;
   json p = position(1, 1.0);
-  p["estimates"] = {estimate("lm", "target", 0.0001, false), estimate("analytic", "0", 0.002)};
+  p["estimates"] =
+      json::array({estimate("lm", "target", 0.0001, false), estimate("analytic", "0", 0.002)});
   EXPECT_NE(view.log_line(p).find("best analytic (marker 0) +2.00 mm"), std::string::npos);
-  p["estimates"] = {estimate("lm", "target", 0.0001, false)};
+  p["estimates"] = json::array({estimate("lm", "target", 0.0001, false)});
+  ASSERT_TRUE(p["estimates"].is_array()) << "else the line below would hold vacuously";
   EXPECT_NE(view.log_line(p).find("no converged estimate"), std::string::npos);
 }
 
@@ -228,7 +230,11 @@ TEST(ProgressView, SolverTableKeepsTheLatestErrorPerSolverAndScopeInRunOrder) {
   view.update(run_start(10));
   view.update(position(1, 1.0));
   json later = position(2, 2.0);
-  later["estimates"] = {estimate("lm", "target", -0.0021)};
+  // json::array, not a braced single value: clang (unlike gcc) reads
+  // `= {estimate(...)}` as a copy of that one object, so the position would
+  // carry no estimates array and the table would keep position 0.
+  later["estimates"] = json::array({estimate("lm", "target", -0.0021)});
+  ASSERT_TRUE(later["estimates"].is_array());
   view.update(later);
   const std::string table = view.solver_table();
   EXPECT_NE(table.find("latest estimates (position 1)"), std::string::npos) << table;
