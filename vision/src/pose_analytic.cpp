@@ -6,6 +6,26 @@
 #include "square_frame.hpp"
 
 namespace vision {
+namespace {
+
+// The rotation nearest (Frobenius norm) to [u v u x v] for unit vectors u, v
+// that are not parallel, in closed form: the same matrix nearest_rotation's
+// SVD gives, without iterating. With e1, e2 the unit bisectors of u + v and
+// u - v and n = (u x v) / |u x v|, [u v u x v] = [e1 e2 n] S with
+// S = [a a 0; b -b 0; 0 0 |u x v|] (a = |u + v| / 2, b = |u - v| / 2); the
+// polar factor of S is blockdiag([1 1; 1 -1] / sqrt 2, 1) up to the sign fixed
+// by det = +1, so the nearest rotation's columns are (e1 + e2) / sqrt 2,
+// (e1 - e2) / sqrt 2 and n: u and v turned symmetrically apart to 90 degrees.
+Eigen::Matrix3d nearest_rotation_of_axes(const Eigen::Vector3d& u, const Eigen::Vector3d& v) {
+  const Eigen::Vector3d e1 = (u + v).normalized(), e2 = (u - v).normalized();
+  Eigen::Matrix3d R;
+  R.col(0) = (e1 + e2) * M_SQRT1_2;
+  R.col(1) = (e1 - e2) * M_SQRT1_2;
+  R.col(2) = u.cross(v).normalized();
+  return R;
+}
+
+}  // namespace
 
 bool analytic_square_pose(const Correspondences& c, Pose* T_cam_target, std::string* why) {
   if (!c.square_side_m) {
@@ -46,11 +66,8 @@ bool analytic_square_pose(const Correspondences& c, Pose* T_cam_target, std::str
   // Eq. 5 (with its r1 read as AC + DB, see the header): the diagonals' sum and
   // difference are along the square's x and y axes.
   const Eigen::Vector3d ac = P[2] - P[0], db = P[1] - P[3];
-  Eigen::Matrix3d R;
-  R.col(0) = (ac + db).normalized();
-  R.col(1) = (ac - db).normalized();
-  R.col(2) = R.col(0).cross(R.col(1));
-  const Pose T_cam_square{nearest_rotation(R), (P[0] + P[1] + P[2] + P[3]) / 4.0};
+  const Pose T_cam_square{nearest_rotation_of_axes((ac + db).normalized(), (ac - db).normalized()),
+                          (P[0] + P[1] + P[2] + P[3]) / 4.0};
   *T_cam_target = T_cam_square * detail::square_in_target(c).inverse();
   return true;
 }
