@@ -9,11 +9,17 @@
 #include <apriltag/tag36h11.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <opencv2/aruco.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "vision/artwork.hpp"
 #include "vision/camera.hpp"
 #include "vision/codebook.hpp"
 #include "vision/detector.hpp"
@@ -36,8 +42,15 @@ cv::Mat raster(const MarkerFamily& family, int id, int px, cv::Size size) {
   return image;
 }
 
+// Rig's detector models the camera of the image: a distortion-free one of the
+// image's size for a scanned sheet (a flat raster has no lens).
 std::vector<int> detect_rig(const cv::Mat& image) {
-  const Detector detector(Camera::paper_default(), Codebook());
+  const Camera camera = image.size() == cv::Size(Camera::paper_default().width_px(),
+                                                 Camera::paper_default().height_px())
+                            ? Camera::paper_default()
+                            : Camera(Intrinsics{1000, 1000, image.cols / 2.0, image.rows / 2.0},
+                                     Distortion{}, image.cols, image.rows);
+  const Detector detector(camera, Codebook());
   std::vector<int> ids;
   for (const Detection& d : detector.detect(image))
     ids.push_back(d.id);
@@ -153,6 +166,65 @@ TEST(MarkerFamily, AprilTagFamiliesReadBackWithApriltag) {
                    [&](const cv::Mat& im) { return detect_apriltag(im, tag36.get()); });
   expect_read_back("apriltag:tag16h5",
                    [&](const cv::Mat& im) { return detect_apriltag(im, tag16.get()); });
+}
+
+// A printed sheet of each family (the paper's four-marker layout, PNG at
+// 100 dpi: 50 mm markers of about 197 px) holds its four markers: the
+// family's own detector finds exactly ids 0-3 on it.
+TEST(MarkerFamily, PrintedTargetOfEachFamilyHoldsItsFourMarkers) {
+  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> tag36(tag36h11_create(),
+                                                                         tag36h11_destroy);
+  std::unique_ptr<apriltag_family_t, void (*)(apriltag_family_t*)> tag16(tag16h5_create(),
+                                                                         tag16h5_destroy);
+  const std::map<std::string, std::function<std::vector<int>(const cv::Mat&)>> detectors = {
+      {"rig4x4", detect_rig},
+      {"aruco:DICT_4X4_50",
+       [](const cv::Mat& im) { return detect_aruco(im, cv::aruco::DICT_4X4_50); }},
+      {"aruco:DICT_6X6_250",
+       [](const cv::Mat& im) { return detect_aruco(im, cv::aruco::DICT_6X6_250); }},
+      {"aruco:DICT_APRILTAG_36h11",
+       [](const cv::Mat& im) { return detect_aruco(im, cv::aruco::DICT_APRILTAG_36h11); }},
+      {"apriltag:tag36h11", [&](const cv::Mat& im) { return detect_apriltag(im, tag36.get()); }},
+      {"apriltag:tag16h5", [&](const cv::Mat& im) { return detect_apriltag(im, tag16.get()); }}};
+  for (const std::string& name : MarkerFamily::names()) {
+    Target target = Target::paper_default();
+    target.family = name;
+    const std::string path =
+        (std::filesystem::temp_directory_path() / "rig_marker_family_target.png").string();
+    write_target_artwork(target, TargetArtworkOptions{100.0, true}, path);
+    std::vector<int> ids = detectors.at(name)(cv::imread(path, cv::IMREAD_GRAYSCALE));
+    std::sort(ids.begin(), ids.end());
+    EXPECT_EQ(ids, (std::vector<int>{0, 1, 2, 3})) << name;
+    std::filesystem::remove(path);
+  }
+}
+
+std::string layout_error(const std::string& extra) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() / "rig_marker_family_layout.toml").string();
+  std::ofstream(path) << "paper = \"A4\"\norigin_mm = [105.0, 148.5]\npose_marker = 0\n"
+                      << extra << "\n[[markers]]\nid = 0\nside_mm = 50.0\ncentre_mm = [0.0, 0.0]\n"
+                      << "[[markers]]\nid = 40\nside_mm = 50.0\ncentre_mm = [0.0, 90.0]\n";
+  try {
+    const Target t = Target::load(path);
+    return "loaded, family " + t.family;
+  } catch (const TargetError& e) {
+    return e.what();
+  }
+}
+
+TEST(MarkerFamily, LayoutFamilyKeyIsCheckedWithTheFileKeyAndAcceptedNames) {
+  const std::string unknown = layout_error("family = \"aruco:DICT_5X5_100\"");
+  EXPECT_NE(unknown.find("rig_marker_family_layout.toml"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("family"), std::string::npos) << unknown;
+  EXPECT_NE(unknown.find("aruco:DICT_6X6_250"), std::string::npos) << unknown;
+  // id 40 is in DICT_4X4_50 (0 .. 49) but not in tag16h5 (0 .. 29) nor rig4x4 (0 .. 34).
+  EXPECT_EQ(layout_error("family = \"aruco:DICT_4X4_50\""), "loaded, family aruco:DICT_4X4_50");
+  const std::string tag16 = layout_error("family = \"apriltag:tag16h5\"");
+  EXPECT_NE(tag16.find("markers[1].id = 40"), std::string::npos) << tag16;
+  EXPECT_NE(tag16.find("0 .. 29"), std::string::npos) << tag16;
+  const std::string rig = layout_error("");
+  EXPECT_NE(rig.find("0 .. 34"), std::string::npos) << rig;
 }
 
 }  // namespace

@@ -15,9 +15,9 @@
 
 namespace vision {
 
-namespace {
+namespace {}  // namespace
 
-MarkerFamily from_codebook(const Codebook& codebook) {
+MarkerFamily MarkerFamily::from_codebook(const Codebook& codebook) {
   std::vector<uint8_t> white;
   for (const uint16_t code : codebook.codes())
     for (int r = 0; r < kCodeCells; ++r)
@@ -25,6 +25,8 @@ MarkerFamily from_codebook(const Codebook& codebook) {
         white.push_back(Codebook::cell_is_white(code, r, c) ? 1 : 0);
   return MarkerFamily(MarkerFamily::kDefaultName, kCodeCells, 1, std::move(white));
 }
+
+namespace {
 
 MarkerFamily from_aruco(const std::string& name, cv::aruco::PREDEFINED_DICTIONARY_NAME which) {
   const cv::Ptr<cv::aruco::Dictionary> dictionary = cv::aruco::getPredefinedDictionary(which);
@@ -64,7 +66,7 @@ MarkerFamily from_apriltag(const std::string& name, apriltag_family_t* (*create)
 }
 
 MarkerFamily build(const std::string& name) {
-  if (name == MarkerFamily::kDefaultName) return from_codebook(Codebook());
+  if (name == MarkerFamily::kDefaultName) return MarkerFamily::from_codebook(Codebook());
   if (name == "aruco:DICT_4X4_50") return from_aruco(name, cv::aruco::DICT_4X4_50);
   if (name == "aruco:DICT_6X6_250") return from_aruco(name, cv::aruco::DICT_6X6_250);
   if (name == "aruco:DICT_APRILTAG_36h11") return from_aruco(name, cv::aruco::DICT_APRILTAG_36h11);

@@ -71,6 +71,9 @@ class MarkerFamily {
     return white_[(static_cast<size_t>(id) * code_cells_ + r) * code_cells_ + c] != 0;
   }
 
+  // A codebook (e.g. with other CodebookOptions) as a family named rig4x4.
+  static MarkerFamily from_codebook(const class Codebook& codebook);
+
   // A family from explicit code grids: `white` holds size x code_cells x
   // code_cells cells, row-major per id, 1 = white. For tests and custom
   // families; std::invalid_argument if the sizes disagree.
