@@ -123,7 +123,7 @@ TEST(Target, MisspeltKeyIsRejected) {
   EXPECT_EQ(error_of(path), path +
                                 ": quiet_cell = 2: unknown key (misspelt?); expected one of name, "
                                 "paper, sheet_width_mm, sheet_height_mm, origin_mm, pose_marker, "
-                                "quiet_cells, markers");
+                                "quiet_cells, family, markers");
   const std::string in_marker = write_temp(
       "misspelt_marker", kHeader + "[[markers]]\nid = 0\nside = 50\ncentre_mm = [0, 0]\n");
   EXPECT_EQ(error_of(in_marker),

@@ -126,15 +126,17 @@ class Page {
 // The marker's cells with its top-left border corner at (x, y), mm: the black
 // square, then every white code cell in one path (adjacent cells in one fill
 // leave no hairline seams in PDF viewers).
-void draw_marker(cairo_t* cr, uint16_t bits, double x, double y, double side_mm) {
-  const double cell = side_mm / kMarkerCells;
+void draw_marker(cairo_t* cr, const MarkerFamily& family, int id, double x, double y,
+                 double side_mm) {
+  const int n = family.marker_cells();
+  const double cell = side_mm / n;
   cairo_set_source_rgb(cr, 0, 0, 0);
   cairo_rectangle(cr, x, y, side_mm, side_mm);
   cairo_fill(cr);
   cairo_set_source_rgb(cr, 1, 1, 1);
-  for (int row = 0; row < kMarkerCells; ++row) {
-    for (int col = 0; col < kMarkerCells; ++col) {
-      if (Codebook::marker_cell_is_white(bits, row, col)) {
+  for (int row = 0; row < n; ++row) {
+    for (int col = 0; col < n; ++col) {
+      if (family.cell_is_white(id, row, col)) {
         cairo_rectangle(cr, x + col * cell, y + row * cell, cell, cell);
       }
     }
@@ -166,12 +168,13 @@ std::string marker_label(int id, double side_mm) {
 
 // The sheet's name and printing instructions along its bottom edge, unless a
 // marker's quiet zone reaches there.
-void draw_sheet_label(cairo_t* cr, const Target& target, double width_mm, double height_mm) {
+void draw_sheet_label(cairo_t* cr, const Target& target, int marker_cells, double width_mm,
+                      double height_mm) {
   constexpr double kMm = 1000.0;
   constexpr double kTextMm = 3.0, kMarginMm = 5.0;
   const double top = height_mm - kMarginMm - kTextMm;
   for (const TargetMarker& m : target.markers) {
-    const double half_mm = (m.side_m / 2 + target.quiet_cells * m.side_m / kMarkerCells) * kMm;
+    const double half_mm = (m.side_m / 2 + target.quiet_cells * m.side_m / marker_cells) * kMm;
     if ((m.centre_m.y() - target.sheet_origin_m.y()) * kMm + half_mm > top) return;
   }
   std::ostringstream text;
@@ -198,9 +201,14 @@ ArtworkFormat artwork_format_from_path(const std::string& path) {
 
 void write_marker_artwork(const Codebook& codebook, int id, const MarkerArtworkOptions& options,
                           const std::string& path) {
-  if (id < 0 || static_cast<size_t>(id) >= codebook.size()) {
+  write_marker_artwork(MarkerFamily::from_codebook(codebook), id, options, path);
+}
+
+void write_marker_artwork(const MarkerFamily& family, int id, const MarkerArtworkOptions& options,
+                          const std::string& path) {
+  if (!family.has_id(id)) {
     throw ArtworkError("marker id " + std::to_string(id) + ": expected 0 .. " +
-                       std::to_string(codebook.size() - 1) + " (the codebook's ids)");
+                       std::to_string(family.size() - 1) + " (the ids of " + family.name() + ")");
   }
   if (!(options.side_mm > 0 && options.side_mm <= 2000)) {
     throw ArtworkError("marker size " + format_mm(options.side_mm) + " mm: expected 0 .. 2000 mm");
@@ -209,10 +217,10 @@ void write_marker_artwork(const Codebook& codebook, int id, const MarkerArtworkO
     throw ArtworkError("quiet zone " + std::to_string(options.quiet_cells) +
                        " cells: expected 0 .. 20");
   }
-  const double quiet_mm = options.quiet_cells * options.side_mm / kMarkerCells;
+  const double quiet_mm = options.quiet_cells * options.side_mm / family.marker_cells();
   const double page_mm = options.side_mm + 2 * quiet_mm;
   Page page(path, page_mm, page_mm, options.dpi);
-  draw_marker(page.cr(), codebook.code(id), quiet_mm, quiet_mm, options.side_mm);
+  draw_marker(page.cr(), family, id, quiet_mm, quiet_mm, options.side_mm);
   if (options.label) {
     draw_label(page.cr(), marker_label(id, options.side_mm), page_mm / 2,
                quiet_mm + options.side_mm, quiet_mm);
@@ -222,12 +230,27 @@ void write_marker_artwork(const Codebook& codebook, int id, const MarkerArtworkO
 
 void write_target_artwork(const Codebook& codebook, const Target& target,
                           const TargetArtworkOptions& options, const std::string& path) {
+  if (target.family != MarkerFamily::kDefaultName) {
+    throw TargetError("target " + target.name + ": family " + target.family +
+                      " given a rig4x4 codebook; expected a rig4x4 target");
+  }
+  write_target_artwork(MarkerFamily::from_codebook(codebook), target, options, path);
+}
+
+void write_target_artwork(const Target& target, const TargetArtworkOptions& options,
+                          const std::string& path) {
+  target.validate(path);
+  write_target_artwork(MarkerFamily::named(target.family), target, options, path);
+}
+
+void write_target_artwork(const MarkerFamily& family, const Target& target,
+                          const TargetArtworkOptions& options, const std::string& path) {
   target.validate(path);
   for (const TargetMarker& m : target.markers) {
-    if (static_cast<size_t>(m.id) >= codebook.size()) {
+    if (!family.has_id(m.id)) {
       throw TargetError("target " + target.name + ": marker id " + std::to_string(m.id) +
-                        " is not in the codebook (ids 0 .. " + std::to_string(codebook.size() - 1) +
-                        ")");
+                        " is not in " + family.name() + " (ids 0 .. " +
+                        std::to_string(family.size() - 1) + ")");
     }
   }
   constexpr double kMm = 1000.0;
@@ -238,13 +261,14 @@ void write_target_artwork(const Codebook& codebook, const Target& target,
     // Sheet coordinates: target-frame position minus the sheet's top-left corner.
     const double cx = (m.centre_m.x() - target.sheet_origin_m.x()) * kMm;
     const double cy = (m.centre_m.y() - target.sheet_origin_m.y()) * kMm;
-    draw_marker(page.cr(), codebook.code(m.id), cx - side_mm / 2, cy - side_mm / 2, side_mm);
+    draw_marker(page.cr(), family, m.id, cx - side_mm / 2, cy - side_mm / 2, side_mm);
     if (options.label) {
       draw_label(page.cr(), marker_label(m.id, side_mm), cx, cy + side_mm / 2,
-                 target.quiet_cells * side_mm / kMarkerCells);
+                 target.quiet_cells * side_mm / family.marker_cells());
     }
   }
-  if (options.label) draw_sheet_label(page.cr(), target, width_mm, height_mm);
+  if (options.label)
+    draw_sheet_label(page.cr(), target, family.marker_cells(), width_mm, height_mm);
   page.finish();
 }
 

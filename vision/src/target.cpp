@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "config/reader.hpp"
-#include "vision/codebook.hpp"
+#include "vision/marker_family.hpp"
 
 namespace vision {
 
@@ -66,8 +66,8 @@ TargetMarker read_marker(config::Table m) {
 }
 
 // [x0, x1] x [y0, y1] of a marker with its quiet zone, target frame.
-Eigen::Vector4d footprint(const TargetMarker& m, int quiet_cells) {
-  const double half = m.side_m / 2 + quiet_cells * m.side_m / kMarkerCells;
+Eigen::Vector4d footprint(const TargetMarker& m, int quiet_cells, int marker_cells) {
+  const double half = m.side_m / 2 + quiet_cells * m.side_m / marker_cells;
   return {m.centre_m.x() - half, m.centre_m.x() + half, m.centre_m.y() - half,
           m.centre_m.y() + half};
 }
@@ -100,6 +100,7 @@ Target Target::load(const std::string& toml_path) {
       root.integer("pose_marker", 0, kMaxInt, "the integer id of a listed marker"));
   t.quiet_cells =
       static_cast<int>(root.integer_or("quiet_cells", 1, 0, kMaxInt, "an integer >= 0"));
+  t.family = root.choice_or("family", MarkerFamily::kDefaultName, MarkerFamily::names());
   for (config::Table& marker :
        root.tables("markers", "an array of tables [[markers]] with id, side_mm and centre_mm")) {
     t.markers.push_back(read_marker(marker));
@@ -111,6 +112,12 @@ Target Target::load(const std::string& toml_path) {
 
 void Target::validate(const std::string& context) const {
   const std::string& f = context;
+  const MarkerFamily* fam = nullptr;
+  try {
+    fam = &MarkerFamily::named(family);
+  } catch (const MarkerFamilyError&) {
+    fail(f, "family", "\"" + family + "\"", "one of " + MarkerFamily::names_text());
+  }
   if (markers.empty()) {
     throw TargetError(
         config::error_message(f, "markers", std::nullopt, "at least one marker", "none given"));
@@ -122,14 +129,17 @@ void Target::validate(const std::string& context) const {
   for (size_t i = 0; i < markers.size(); ++i) {
     const TargetMarker& m = markers[i];
     const std::string prefix = "markers[" + std::to_string(i) + "].";
-    if (m.id < 0) fail(f, prefix + "id", std::to_string(m.id), "a codebook id >= 0");
+    if (!fam->has_id(m.id)) {
+      fail(f, prefix + "id", std::to_string(m.id),
+           "an id of family " + family + " (0 .. " + std::to_string(fam->size() - 1) + ")");
+    }
     if (!ids.insert(m.id).second) {
       fail(f, prefix + "id", std::to_string(m.id), "an id not used by another marker");
     }
     if (!(m.side_m > 0) || !std::isfinite(m.side_m)) {
       fail(f, prefix + "side_mm", fmt_mm(m.side_m), "the marker side in mm > 0");
     }
-    const Eigen::Vector4d box = footprint(m, quiet_cells);
+    const Eigen::Vector4d box = footprint(m, quiet_cells, fam->marker_cells());
     const double eps = 1e-9;
     if (box[0] < sheet_origin_m.x() - eps || box[1] > sheet_origin_m.x() + sheet_width_m + eps ||
         box[2] < sheet_origin_m.y() - eps || box[3] > sheet_origin_m.y() + sheet_height_m + eps) {
@@ -142,7 +152,7 @@ void Target::validate(const std::string& context) const {
                std::to_string(sheet_origin_m.y() * kMmPerM) + "] mm in the target frame)");
     }
     for (size_t j = 0; j < i; ++j) {
-      const Eigen::Vector4d other = footprint(markers[j], quiet_cells);
+      const Eigen::Vector4d other = footprint(markers[j], quiet_cells, fam->marker_cells());
       const bool overlap = box[0] < other[1] - eps && other[0] < box[1] - eps &&
                            box[2] < other[3] - eps && other[2] < box[3] - eps;
       if (overlap) {

@@ -5,36 +5,25 @@
 
 #include "commands.hpp"
 #include "vision/artwork.hpp"
-#include "vision/codebook.hpp"
 #include "vision/target.hpp"
 
 namespace rig::cli {
 namespace {
 
-// The layout, checked against the codebook before anything is written.
-vision::Target read_layout(const vision::Codebook& codebook, const std::string& layout) {
-  vision::Target target = vision::Target::load(layout);
-  for (const vision::TargetMarker& m : target.markers)
-    if (static_cast<size_t>(m.id) >= codebook.size())
-      throw vision::TargetError(layout + ": marker id " + std::to_string(m.id) +
-                                ": expected a codebook id 0 .. " +
-                                std::to_string(codebook.size() - 1));
-  return target;
-}
-
 int write_target(const std::string& layout, const vision::TargetArtworkOptions& options,
                  const std::string& out) {
-  const vision::Codebook codebook;
   vision::Target target;
   // Bad input (exit 2) first: an unknown extension is an ArtworkError, as is
   // a file that cannot be written (exit 1).
   read_input("", [&] {
     vision::artwork_format_from_path(out);
-    target = read_layout(codebook, layout);
+    // Checks the family and that every id is one of its ids.
+    target = vision::Target::load(layout);
   });
-  vision::write_target_artwork(codebook, target, options, out);
-  std::cout << "wrote " << target.markers.size() << " markers on a " << target.sheet_width_m * 1000
-            << " x " << target.sheet_height_m * 1000 << " mm sheet to " << out << "\n";
+  vision::write_target_artwork(target, options, out);
+  std::cout << "wrote " << target.markers.size() << " " << target.family << " markers on a "
+            << target.sheet_width_m * 1000 << " x " << target.sheet_height_m * 1000
+            << " mm sheet to " << out << "\n";
   return kExitOk;
 }
 
@@ -47,9 +36,10 @@ void add_target_command(CLI::App& app, ExitStatus& status) {
   auto out = std::make_shared<std::string>();
   auto options = std::make_shared<vision::TargetArtworkOptions>();
   auto no_label = std::make_shared<bool>(false);
-  cmd->add_option("--target", *layout,
-                  "layout file (TOML: paper, origin_mm, pose_marker, [[markers]] id, side_mm, "
-                  "centre_mm), e.g. config/targets/paper.toml")
+  cmd->add_option(
+         "--target", *layout,
+         "layout file (TOML: paper, origin_mm, pose_marker, family, [[markers]] id, side_mm, "
+         "centre_mm), e.g. config/targets/paper.toml")
       ->required();
   cmd->add_option("--out", *out, "output file: .svg, .pdf or .png")->required();
   cmd->add_option("--dpi", options->dpi, "PNG resolution, pixels per inch")->capture_default_str();

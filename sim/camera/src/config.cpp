@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "config/reader.hpp"
-#include "vision/codebook.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/target.hpp"
 
 namespace sim::camera {
@@ -92,8 +92,9 @@ std::unique_ptr<CameraServer> make_camera_server(const SimRigConfig& config,
   scene::SceneOptions options = config.realism.scene;
   options.thin_prism = truth.thin_prism;
   options.exposure_time_s = config.camera.nominal_exposure_us * 1e-6;
-  auto renderer = std::make_shared<const scene::SceneRenderer>(truth.camera, truth.target,
-                                                               vision::Codebook(), options);
+  // The sheet in the target's own family (rig4x4 unless the layout names another).
+  auto renderer = std::make_shared<const scene::SceneRenderer>(
+      truth.camera, truth.target, vision::MarkerFamily::named(truth.target.family), options);
   CameraServerOptions server_options = config.camera;
   server_options.bayer_rg = config.realism.bayer_rg;
   server_options.filter_response = config.realism.filter_response;

@@ -100,15 +100,15 @@ struct SceneRenderer::Impl {
   detail::FixedPattern pattern;
   detail::SheetBow bow;
 
-  Impl(const vision::Camera& c, const vision::Target& t, const vision::Codebook& codebook,
+  Impl(const vision::Camera& c, const vision::Target& t, const vision::MarkerFamily& family,
        const SceneOptions& o)
       : camera(c),
         target(t),
         options(o),
         lens(c, o.thin_prism),
         rays(detail::build_ray_table(lens, o.vignetting)),
-        front(t, codebook, true),
-        back(t, codebook, false),
+        front(t, family, true),
+        back(t, family, false),
         pattern(detail::make_fixed_pattern(c.width_px(), c.height_px(), o.prnu_rel,
                                            o.dsnu_electrons, o.fixed_pattern_seed)),
         bow(o, t) {}
@@ -307,9 +307,13 @@ double defocus_sigma_px(const SceneOptions& o, double fx_px, double depth_m) {
 }
 
 SceneRenderer::SceneRenderer(const vision::Camera& camera, const vision::Target& target,
-                             const vision::Codebook& codebook, SceneOptions options) {
+                             const vision::Codebook& codebook, SceneOptions options)
+    : SceneRenderer(camera, target, vision::MarkerFamily::from_codebook(codebook), options) {}
+
+SceneRenderer::SceneRenderer(const vision::Camera& camera, const vision::Target& target,
+                             const vision::MarkerFamily& family, SceneOptions options) {
   validate(options);
-  impl_ = std::make_unique<Impl>(camera, target, codebook, options);
+  impl_ = std::make_unique<Impl>(camera, target, family, options);
 }
 
 SceneRenderer::~SceneRenderer() = default;

@@ -5,7 +5,7 @@
 #include <array>
 #include <vector>
 
-#include "vision/codebook.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/target.hpp"
 
 namespace sim::scene::detail {
@@ -22,7 +22,7 @@ enum class Region { kBackground, kPaper, kInk, kMixed };
 class SheetArtwork {
  public:
   // show_markers false draws the sheet blank (its back, seen from behind).
-  SheetArtwork(const vision::Target& target, const vision::Codebook& codebook, bool show_markers);
+  SheetArtwork(const vision::Target& target, const vision::MarkerFamily& family, bool show_markers);
 
   // What an axis-aligned box [x0, x1] x [y0, y1] (target frame, metres) covers:
   // one uniform region, or kMixed when it straddles an edge.
@@ -37,18 +37,16 @@ class SheetArtwork {
       const int c1 = static_cast<int>((x1 - m.x0) * m.inv_cell);
       const int r0 = static_cast<int>((y0 - m.y0) * m.inv_cell);
       const int r1 = static_cast<int>((y1 - m.y0) * m.inv_cell);
-      if (c0 != c1 || r0 != r1 || c0 >= vision::kMarkerCells || r0 >= vision::kMarkerCells) {
-        return Region::kMixed;
-      }
-      return m.black[r0][c0] ? Region::kInk : Region::kPaper;
+      if (c0 != c1 || r0 != r1 || c0 >= m.n || r0 >= m.n) return Region::kMixed;
+      return m.black[static_cast<size_t>(r0 * m.n + c0)] ? Region::kInk : Region::kPaper;
     }
     return Region::kPaper;
   }
 
   // Exact coverage of the box centred at (cx, cy) with half extents hx, hy
   // (metres, > 0). The marker cells are integrated through a summed-area table
-  // of each marker's 6x6 grid, whose bilinear interpolation is the exact
-  // integral of the piecewise-constant cells (no resolution limit).
+  // of each marker's n x n grid (n = the family's marker_cells()), whose bilinear interpolation is
+  // the exact integral of the piecewise-constant cells (no resolution limit).
   Coverage integrate(double cx, double cy, double hx, double hy) const;
 
  private:
@@ -56,8 +54,10 @@ class SheetArtwork {
     double x0 = 0, y0 = 0;  // top-left corner of the black square, metres
     double x1 = 0, y1 = 0;  // bottom-right corner
     double cell = 0, inv_cell = 0;
-    std::array<std::array<float, 7>, 7> sat{};      // black cells in rows < r, cols < c
-    std::array<std::array<uint8_t, 6>, 6> black{};  // 1 = ink
+    int n = 0;                   // cells per side
+    std::vector<float> sat;      // (n + 1)^2: black cells in rows < r, cols < c
+    std::vector<uint8_t> black;  // n^2, row-major: 1 = ink
+    float sat_at(int r, int c) const { return sat[static_cast<size_t>(r * (n + 1) + c)]; }
   };
   // The black area (in cells^2) of a marker inside [u0, u1] x [v0, v1] (cells).
   static double black_cells(const Marker& m, double u0, double u1, double v0, double v1);

@@ -6,17 +6,18 @@
 // size is round(size_mm / 25.4 * dpi) and its pHYs chunk is not relied upon.
 // Print at 100 % ("actual size"), never "fit to page".
 //
-// Marker artwork (see vision/codebook.hpp for the cells): the 6x6 cells of
-// side s / 6, black border, code cells white for bit 1, surrounded by a white
-// quiet zone of quiet_cells cells. The id and size are printed small in grey
-// in the outer half of the bottom quiet zone (omitted when the quiet zone is
-// too narrow to hold legible text away from the border, i.e. under ~3 mm).
+// Marker artwork (see vision/marker_family.hpp for the cells): the n x n
+// cells of side s / n of the marker's family (6 x 6 for rig4x4), black border, code cells white for
+// bit 1, surrounded by a white quiet zone of quiet_cells cells. The id and size are printed small
+// in grey in the outer half of the bottom quiet zone (omitted when the quiet zone is too narrow to
+// hold legible text away from the border, i.e. under ~3 mm).
 #pragma once
 
 #include <stdexcept>
 #include <string>
 
 #include "vision/codebook.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/target.hpp"
 
 namespace vision {
@@ -45,6 +46,10 @@ struct MarkerArtworkOptions {
 // side_mm * (6 + 2 * quiet_cells) / 6. Throws ArtworkError.
 void write_marker_artwork(const Codebook& codebook, int id, const MarkerArtworkOptions& options,
                           const std::string& path);
+// The same for marker `id` of any family: a page of side
+// side_mm * (n + 2 * quiet_cells) / n, n = family.marker_cells().
+void write_marker_artwork(const MarkerFamily& family, int id, const MarkerArtworkOptions& options,
+                          const std::string& path);
 
 struct TargetArtworkOptions {
   double dpi = 300.0;  // PNG only: pixels per inch, in [10, 4800]
@@ -54,7 +59,13 @@ struct TargetArtworkOptions {
 // Writes the whole sheet of a target (its sheet_width_m x sheet_height_m page;
 // markers at their centres relative to sheet_origin_m, quiet zones white).
 // Throws ArtworkError (or TargetError if an id is not in the codebook).
+// This overload needs a rig4x4 target (TargetError otherwise).
 void write_target_artwork(const Codebook& codebook, const Target& target,
+                          const TargetArtworkOptions& options, const std::string& path);
+// The sheet in the target's own family (Target::family).
+void write_target_artwork(const Target& target, const TargetArtworkOptions& options,
+                          const std::string& path);
+void write_target_artwork(const MarkerFamily& family, const Target& target,
                           const TargetArtworkOptions& options, const std::string& path);
 
 }  // namespace vision

@@ -14,7 +14,8 @@
 //   D = centre + (-s/2, +s/2, 0)  bottom-left
 // The pose solvers take the pose marker's A, B, C, D as their first four points.
 // Each marker is surrounded by a white quiet zone of quiet_cells cells
-// (cell = s / 6) that no other marker and no sheet edge may enter.
+// (cell = s / marker_cells of the target's family, s / 6 for rig4x4) that no other marker and no
+// sheet edge may enter.
 //
 // Layout file (TOML; lengths in mm), e.g. config/targets/paper.toml:
 //   name = "paper"                 # optional, free text
@@ -24,8 +25,10 @@
 //   origin_mm = [105.0, 148.5]     # target-frame origin, from the sheet's top-left corner
 //   pose_marker = 0                # id of the marker that gives the pose
 //   quiet_cells = 1                # optional, default 1
+//   family = "rig4x4"              # optional, default rig4x4; one of
+//                                  #   vision::MarkerFamily::names()
 //   [[markers]]
-//   id = 0                         # codebook id, >= 0, unique
+//   id = 0                         # id in the family, >= 0, unique
 //   side_mm = 50.0                 # > 0
 //   centre_mm = [0.0, 0.0]         # in the target frame
 // A key not listed is refused (a typo never falls back to a default). A bad
@@ -71,6 +74,9 @@ struct Target {
   // White quiet zone around each marker, in cells (cell = side / 6). The
   // detector needs at least one cell of white outside the border.
   int quiet_cells = 1;
+  // The marker family the sheet is printed in (vision/marker_family.hpp):
+  // one of MarkerFamily::names(); every marker id must be one of its ids.
+  std::string family = "rig4x4";
 
   // The paper's sheet (what config/targets/paper.toml holds): A4 portrait,
   // four 5 cm markers, ids 0-3. Marker 0 is the pose marker, centred at the
@@ -83,7 +89,8 @@ struct Target {
   // validates it. Throws TargetError.
   static Target load(const std::string& toml_path);
 
-  // Checks the invariants: at least one marker, unique ids >= 0, sides > 0,
+  // Checks the invariants: a known family, at least one marker, unique ids of
+  // that family, sides > 0,
   // pose_marker_id among the markers, quiet_cells >= 0, markers with their
   // quiet zones inside the sheet and not overlapping. Throws TargetError
   // (the message starts with `context`, e.g. the file name).

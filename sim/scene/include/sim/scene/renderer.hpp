@@ -52,6 +52,7 @@
 
 #include "vision/camera.hpp"
 #include "vision/codebook.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/pose.hpp"
 #include "vision/target.hpp"
 
@@ -299,6 +300,10 @@ class SceneRenderer {
   // option is out of range (naming it).
   SceneRenderer(const vision::Camera& camera, const vision::Target& target,
                 const vision::Codebook& codebook, SceneOptions options = {});
+  // The markers drawn in any family's cells (e.g. MarkerFamily::named(target.family));
+  // std::invalid_argument if a marker id is not in the family.
+  SceneRenderer(const vision::Camera& camera, const vision::Target& target,
+                const vision::MarkerFamily& family, SceneOptions options = {});
   ~SceneRenderer();
   SceneRenderer(SceneRenderer&&) noexcept;
   SceneRenderer& operator=(SceneRenderer&&) noexcept;
