@@ -230,6 +230,19 @@ TEST_F(CalibrationFiles, YamlNamedXmlIsReadAsYaml) {
   EXPECT_EQ(vision::Camera::load(path("good.xml")).width_px(), 640);
 }
 
+// ROS camera_info in flow style, as docs/target-and-geometry.md shows it and
+// as many tools write it: {rows, cols, data} on one line or over several.
+TEST_F(CalibrationFiles, RosFlowMappingsAreRead) {
+  write("flow.yaml",
+        "image_width: 640\nimage_height: 480\n"
+        "camera_matrix: {rows: 3, cols: 3, data: [600, 0, 320, 0, 610, 240, 0, 0, 1]}\n"
+        "distortion_model: plumb_bob\n"
+        "distortion_coefficients: {rows: 1, cols: 5,\n  data: [-0.2, 0.1, 0, 0, 0]}\n");
+  const vision::Camera cam = vision::Camera::load(path("flow.yaml"));
+  EXPECT_EQ(cam.intrinsics().fy, 610);
+  EXPECT_EQ(cam.distortion().k1, -0.2);
+}
+
 // Only the YAML that calibrations use is read; anything else is refused
 // with the line and what was expected, never handed to a general parser.
 TEST_F(CalibrationFiles, YamlOutsideTheCalibrationSubsetIsRefusedNamingTheLine) {
@@ -238,7 +251,9 @@ TEST_F(CalibrationFiles, YamlOutsideTheCalibrationSubsetIsRefusedNamingTheLine) 
   const std::vector<std::pair<std::string, std::string>> cases = {
       {head + "camera_matrix:\n\trows: 3\n", "line 4: a tab in the indentation"},
       {head + "camera_matrix:\n  - 1\n  - 2\n", "line 4: a block sequence item '- 1'"},
-      {head + "camera_matrix: {rows: 3, cols: 3}\n", "line 3: a flow mapping"},
+      {head + "camera_matrix: {rows: 3, cols: 3\n", "line 3: a mapping '{' with no closing '}'"},
+      {head + "camera_matrix: {rows: {a: 1}}\n", "line 3: '}' after the mapping"},
+      {head + "camera_matrix: {rows: 3} x\n", "line 3: 'x' after the mapping"},
       {head + "camera_matrix: &m [1, 2]\n", "line 3: '&' (an anchor"},
       {head + "camera_matrix: !!binary abc\n", "line 3: the tag '!!binary'"},
       {head + "image_width: 641\n", "line 3: key 'image_width' given twice"},

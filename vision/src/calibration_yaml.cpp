@@ -220,7 +220,7 @@ class Parser {
       return b;
     }
     if (rest.front() == '[') return flow_sequence(k, rest);
-    if (rest.front() == '{') fail(k, "a flow mapping '{...}'", "KEY: VALUE lines, indented");
+    if (rest.front() == '{') return flow_mapping(k, rest);
     if (std::string_view("&*|>?@`%,]}").find(rest.front()) != std::string_view::npos)
       fail(k,
            "'" + std::string(1, rest.front()) + "' (an anchor, alias, block scalar or indicator)",
@@ -268,6 +268,63 @@ class Parser {
     v.number = parse_number(v.text, &v.integer);
     pos = end == std::string_view::npos ? rest.size() : end;
     return v;
+  }
+
+  // {KEY: VALUE, ...} from line k on (ROS's `{rows: 3, cols: 3, data: [...]}`),
+  // which may continue over the next lines; each value a scalar or [a, b, ...].
+  Node flow_mapping(std::size_t k, std::string_view first) {
+    std::string text(first.substr(1));
+    while (text.find('}') == std::string::npos) {
+      if (i_ >= lines_.size())
+        fail(k, "a mapping '{' with no closing '}'", "'}' at the end of the mapping");
+      text += ' ';
+      text += strip_comment(lines_[i_++]);
+    }
+    const std::size_t close = text.find('}');
+    if (!trim(std::string_view(text).substr(close + 1)).empty())
+      fail(k, "'" + excerpt(trim(std::string_view(text).substr(close + 1))) + "' after the mapping",
+           "nothing after '}'");
+    Node map;
+    map.kind = Node::Kind::kMap;
+    map.line = static_cast<int>(k + 1);
+    const std::string_view body = std::string_view(text).substr(0, close);
+    std::size_t pos = 0;
+    while (pos < body.size()) {
+      const std::size_t colon = body.find(':', pos);
+      if (colon == std::string_view::npos)
+        fail(k, "'" + excerpt(trim(body.substr(pos))) + "' in a mapping", "KEY: VALUE");
+      const std::string key(trim(body.substr(pos, colon - pos)));
+      if (key.empty() || !is_key_start(key.front()))
+        fail(k, "'" + excerpt(key) + "' is not a key", "a key of letters, digits, '_', '-', '.'");
+      for (const char c : key)
+        if (!is_key_char(c)) fail(k, "'" + excerpt(key) + "' is not a key", "a key of letters");
+      if (map.find(key)) fail(k, "key '" + key + "' given twice", "each key once");
+      std::size_t v = colon + 1;
+      while (v < body.size() && body[v] == ' ')
+        ++v;
+      std::size_t end = body.find(',', v);
+      if (v < body.size() && body[v] == '[') {
+        const std::size_t bracket = body.find(']', v);
+        if (bracket == std::string_view::npos)
+          fail(k, "a sequence '[' with no closing ']'", "']' at the end of the sequence");
+        map.entries.emplace_back(key, flow_sequence(k, body.substr(v, bracket + 1 - v)));
+        end = body.find(',', bracket);
+      } else {
+        const std::string_view item =
+            trim(body.substr(v, end == std::string_view::npos ? std::string_view::npos : end - v));
+        if (item.empty() || item.front() == '{')
+          fail(k, "'" + excerpt(item) + "' as the value of '" + key + "'",
+               "a number, a string or [a, b, ...]");
+        std::size_t p = 0;
+        Node value = scalar_at(k, item, p, /*in_flow=*/false);
+        if (p != item.size())
+          fail(k, "'" + excerpt(item.substr(p)) + "' after the value", "one value per key");
+        map.entries.emplace_back(key, std::move(value));
+      }
+      if (end == std::string_view::npos) break;
+      pos = end + 1;
+    }
+    return map;
   }
 
   // [a, b, ...] from line k on, which may continue over the next lines.

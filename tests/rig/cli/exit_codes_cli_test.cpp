@@ -42,7 +42,7 @@ TEST_F(RigExitCodes, AMarkerWithAnUnknownExtensionOrIdIsBadInput) {
       << extension.err;
   const RigRun id = run_rig("marker --id 35 --out " + file("m.svg"));
   EXPECT_EQ(id.exit_code, 2);
-  EXPECT_EQ(id.err, "rig marker: --id 35: expected 0 .. 34\n");
+  EXPECT_EQ(id.err, "rig marker: --id 35: expected 0 .. 34 (the ids of rig4x4)\n");
   EXPECT_FALSE(fs::exists(file("m.svg")));
 }
 
