@@ -22,8 +22,8 @@ std::string errno_text(const std::string& what) {
   return what + ": " + std::strerror(errno);
 }
 
-// Milliseconds left until `deadline` for poll(2), at least 0, rounded up so
-// that a deadline 0.3 ms away is not polled as "now".
+// Milliseconds left until `deadline` for poll(2), at least 0, rounded up:
+// a deadline less than 1 ms ahead waits 1 ms instead of returning at once.
 int poll_ms(ChildProcess::Clock::time_point deadline) {
   const auto left = deadline - ChildProcess::Clock::now();
   if (left <= std::chrono::nanoseconds::zero()) return 0;
