@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "motion/errors.hpp"
+#include "settle_watch.hpp"
 
 namespace motion {
 namespace {
@@ -588,18 +589,12 @@ std::string ModbusBench::describe_state(const BenchStatus& s) const {
 }
 
 BenchStatus ModbusBench::wait_settled(milliseconds timeout) {
-  const auto start = Clock::now();
-  const auto deadline = start + timeout;
-  const auto settle_time = milliseconds(profile_.timing.settle_time_ms);
-  bool settling = false;
-  Clock::time_point settled_since = start;
+  const auto deadline = Clock::now() + timeout;
+  SettleWatch watch(milliseconds(profile_.timing.settle_time_ms));
   for (;;) {
     const BenchStatus s = checked_status();
-    const bool ok = on_target(s);
     const auto now = Clock::now();
-    if (ok && !settling) settled_since = now;
-    settling = ok;
-    if (ok && now - settled_since >= settle_time) return s;
+    if (watch.settled(on_target(s), now)) return s;
     if (now >= deadline) {
       throw BenchTimeout(where() + ": not settled after " + std::to_string(timeout.count()) +
                          " ms: " + describe_state(s));

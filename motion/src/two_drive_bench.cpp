@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "motion/errors.hpp"
+#include "settle_watch.hpp"
 
 namespace motion {
 namespace {
@@ -98,11 +99,8 @@ void TwoDriveBench::move_to(double x_mm, double y_mm) {
 }
 
 BenchStatus TwoDriveBench::wait_settled(milliseconds timeout) {
-  const auto start = Clock::now();
-  const auto deadline = start + timeout;
-  const auto settle_time = milliseconds(profile_.timing.settle_time_ms);
-  bool settling = false;
-  Clock::time_point settled_since = start;
+  const auto deadline = Clock::now() + timeout;
+  SettleWatch watch(milliseconds(profile_.timing.settle_time_ms));
   for (;;) {
     BenchStatus sx, sy;
     try {
@@ -117,11 +115,8 @@ BenchStatus TwoDriveBench::wait_settled(milliseconds timeout) {
       stop_quietly(*x_, "an alarm on the Y axis drive");
       throw;
     }
-    const bool ok = x_->on_target(sx) && y_->on_target(sy);
     const auto now = Clock::now();
-    if (ok && !settling) settled_since = now;
-    settling = ok;
-    if (ok && now - settled_since >= settle_time) return status();
+    if (watch.settled(x_->on_target(sx) && y_->on_target(sy), now)) return status();
     if (now >= deadline) {
       throw BenchTimeout("bench of two drives (" + profile_.source + "): not settled after " +
                          std::to_string(timeout.count()) + " ms: " + x_->where() + " " +
