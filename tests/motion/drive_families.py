@@ -48,8 +48,9 @@ overload alarm (PCON 0E0h, AZ 30h) and stops it, as a jammed axis would.
 
 Links: --tcp (default): Modbus TCP on an ephemeral port of 127.0.0.1, first
 line printed "PORT <n>"; --rtu DEVICE [--baud B --parity N|E|O --stop 1|2]:
-Modbus RTU on a serial device (one end of a socat pty pair), first line
-"READY". A unit other than 1 and 2 gets no answer. SIGTERM or SIGINT stops it.
+Modbus RTU on a serial device (one end of a socat pty pair: use --parity N
+there, pyserial cannot set parity on a pty, which carries bytes whatever its
+settings), first line "READY". A unit other than 1 and 2 gets no answer. SIGTERM or SIGINT stops it.
 """
 import argparse
 import asyncio

@@ -296,6 +296,34 @@ class PtyPeer {
   std::thread thread_;
 };
 
+TEST_F(RtuOverPty, LinksToTwoUnitsOnOneDeviceShareOnePort) {
+  // Two drives on one RS-485 line: one open port, so that the silent
+  // interval is kept between frames to different units, and a port closed
+  // after a link error is closed for both.
+  const std::string line = "modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1";
+  motion::ModbusLink x(motion::BenchUrl::parse(line + "&unit=1"), 1, 200ms);
+  motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 200ms);
+  EXPECT_FALSE(y.connected());
+  ASSERT_EQ(x.connect(), 0);
+  EXPECT_TRUE(y.connected());
+  y.close();
+  EXPECT_FALSE(x.connected());
+  // Other serial settings on the same device are refused, naming both.
+  try {
+    motion::ModbusLink z(
+        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=19200&parity=E&unit=3"), 3,
+        200ms);
+    FAIL() << "a second link at 19200 baud joined a line at 9600 baud";
+  } catch (const motion::ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir_ +
+                                         "/driver is already in use at other serial "
+                                         "settings (modbus-rtu://" +
+                                         dir_ + "/driver?baud=9600"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // A real libmodbus RTU server (unit 1, every register kept) stamps when a
   // request has arrived and when its answer has gone. A request leaves the
