@@ -272,6 +272,36 @@ INSTANTIATE_TEST_SUITE_P(Families, DriveFamily, ::testing::Values(kPcon, kAz),
                            return info.param.name;
                          });
 
+// The PCON's servo-on, taken out of the profile: the controllers then refuse
+// a home return with their alarm 080h, so the profile's servo_on is what
+// makes them move.
+class PconDrives : public DriveFamily {};
+
+TEST_P(PconDrives, WithoutTheServoOnAHomeReturnIsRefusedWithAlarm080h) {
+  start();
+  auto drives = std::make_shared<motion::AxisDrives>(*profile_.axis_drives);
+  for (motion::AxisDrive* d : {&drives->x, &drives->y}) {
+    d->drive.protocol.servo_on = 0;
+    d->drive.protocol.servo_ready_bit = -1;
+  }
+  profile_.axis_drives = drives;
+  auto bench = connect();
+  bench->home();
+  try {
+    bench->wait_settled(kSettle);
+    FAIL() << "a home return with the servo off was not refused";
+  } catch (const motion::BenchFault& e) {
+    EXPECT_EQ(e.code(), 0x080);
+    EXPECT_EQ(e.meaning(), "move command while the servo is off");
+  }
+  EXPECT_EQ(bench->status().position.x_mm, 5);  // where it powered up
+}
+
+INSTANTIATE_TEST_SUITE_P(Families, PconDrives, ::testing::Values(kPcon),
+                         [](const ::testing::TestParamInfo<Family>& info) {
+                           return info.param.name;
+                         });
+
 // The AZ pair over Modbus RTU: the emulator serves one end of a socat pty
 // pair, the driver opens the other at 115200 baud 8E1 (the profile header's
 // link) as the URL says. Ptys carry bytes whatever their settings (and
