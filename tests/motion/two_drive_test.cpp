@@ -293,8 +293,8 @@ TEST(TwoDriveProfile, ShippedTemplateLoads) {
   EXPECT_EQ(p.axis_drives->y.drive.unit_id, 2);
 }
 
-// The drive-family profiles load and say what their header says; they are
-// not yet driven against an emulator of their manual's semantics.
+// The drive-family profiles load and say what their header says (they are
+// driven against an emulator of their semantics in drive_families_test.cpp).
 TEST(TwoDriveProfile, ShippedDriveFamilyProfilesLoad) {
   const motion::DriveProfile iai = motion::load_drive_profile(
       std::string(RIG_SOURCE_DIR) + "/config/benches/iai_pcon_two_axes.toml");
