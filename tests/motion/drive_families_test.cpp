@@ -23,6 +23,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <memory>
+#include <ostream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -71,6 +72,11 @@ const Family kPcon{"pcon",
                    0x0E0};
 const Family kAz{"az", "oriental_az_two_axes.toml", 0x1802, 0x00CC, 0x007D, 0x1805, 0,
                  0x4A, "return-to-home incomplete", 0x30};
+
+// ctest lists a case by its family's name.
+void PrintTo(const Family& f, std::ostream* os) {
+  *os << f.name;
+}
 
 class DriveFamily : public ::testing::TestWithParam<Family> {
  protected:
