@@ -427,9 +427,11 @@ void ModbusBench::command(const char* what, std::uint16_t code, Acceptance kind,
   write_verified(what, {{reg, held_bits()}});
 }
 
-void ModbusBench::set_speed(double speed_mm_s) {
+void ModbusBench::check_speed(double speed_mm_s) const {
+  // One drive of several is named; a controller's message is the bench's own.
+  const std::string who = profile_.single_axis() ? where() + ": " : "";
   if (!(speed_mm_s > 0) || speed_mm_s > profile_.max_speed_mm_s) {
-    throw SoftLimitError("speed " + fmt_mm(speed_mm_s) + " mm/s is outside (0, " +
+    throw SoftLimitError(who + "speed " + fmt_mm(speed_mm_s) + " mm/s is outside (0, " +
                          fmt_mm(profile_.max_speed_mm_s) + "] (motion.max_speed_mm_s of " +
                          profile_.source + ")");
   }
@@ -437,14 +439,23 @@ void ModbusBench::set_speed(double speed_mm_s) {
   // rounds to 0 is refused by the drive (or means "stand still").
   if (std::lround(speed_mm_s * profile_.speed_units_per_mm_s) < 1) {
     throw SoftLimitError(
-        "speed " + fmt_mm(speed_mm_s) + " mm/s rounds to 0 in the drive's units (" +
+        who + "speed " + fmt_mm(speed_mm_s) + " mm/s rounds to 0 in the drive's units (" +
         fmt_mm(profile_.speed_units_per_mm_s) + " per mm/s, " + profile_.source +
         "); expected at least " + fmt_mm(0.5 / profile_.speed_units_per_mm_s) + " mm/s");
   }
+}
+
+void ModbusBench::set_speed(double speed_mm_s) {
+  check_speed(speed_mm_s);
   speed_mm_s_ = speed_mm_s;
 }
 
 void ModbusBench::move_to(double x_mm, double y_mm) {
+  write_target(x_mm, y_mm);
+  start_move();
+}
+
+std::array<std::int32_t, 2> ModbusBench::target_counts(double x_mm, double y_mm) const {
   const SoftLimits& lim = profile_.soft_limits;
   // A single-axis drive moves its own axis, given as x_mm; y_mm is not used.
   if (profile_.single_axis()) y_mm = 0;
@@ -467,10 +478,12 @@ void ModbusBench::move_to(double x_mm, double y_mm) {
       c = static_cast<std::int32_t>(std::ceil(lo * profile_.counts_per_mm));
     return c;
   };
-  const std::array<std::int32_t, 2> counts = {
-      quantize(x_mm, lim.x_min_mm, lim.x_max_mm),
-      profile_.single_axis() ? 0 : quantize(y_mm, lim.y_min_mm, lim.y_max_mm)};
+  return {quantize(x_mm, lim.x_min_mm, lim.x_max_mm),
+          profile_.single_axis() ? 0 : quantize(y_mm, lim.y_min_mm, lim.y_max_mm)};
+}
 
+void ModbusBench::write_target(double x_mm, double y_mm) {
+  const std::array<std::int32_t, 2> counts = target_counts(x_mm, y_mm);
   const RegisterMap& r = profile_.registers;
   std::map<int, std::uint16_t> regs;
   const int w = profile_.position_registers();
@@ -488,13 +501,34 @@ void ModbusBench::move_to(double x_mm, double y_mm) {
   // The previous target no longer describes the drive while this one is being
   // written: a reconnect in between re-reads and resumes the write.
   pending_ = Pending::kNone;
+  written_.reset();
   ensure_servo_on("move_to");
   write_verified("move_to (targets)", regs);
+  written_ = counts;
+}
+
+void ModbusBench::start_move() {
+  if (!written_) {
+    throw BenchError(where() + ": start_move without a target written (write_target first)");
+  }
+  const std::array<std::int32_t, 2> counts = *written_;
   const XY target{profile_.to_mm(counts[0]), profile_.to_mm(counts[1])};
   command("move_to (command)", profile_.commands.move_absolute, Acceptance::kMotion, target);
+  written_.reset();
   pending_ = Pending::kMove;
   target_counts_ = counts;
   target_mm_ = target;
+}
+
+XY ModbusBench::target_registers() {
+  std::array<std::int32_t, 2> counts{};
+  const int err = transact("reading the targets", [&] { return read_targets(counts); });
+  if (err != 0) {
+    throw BenchError(where() +
+                     ": reading the target registers failed: " + ModbusLink::describe(err) +
+                     " (check registers.target* of " + profile_.source + ")");
+  }
+  return {profile_.to_mm(counts[0]), profile_.to_mm(counts[1])};
 }
 
 void ModbusBench::home() {

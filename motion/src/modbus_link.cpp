@@ -4,6 +4,7 @@
 #include <modbus/modbus.h>
 
 #include <cerrno>
+#include <map>
 #include <thread>
 
 #include "motion/errors.hpp"
@@ -19,54 +20,107 @@ std::chrono::microseconds ModbusLink::frame_silence(const BenchUrl& url) {
   return std::chrono::microseconds(us);
 }
 
-ModbusLink::ModbusLink(const BenchUrl& url, int unit_id, std::chrono::milliseconds timeout)
-    : url_(url), unit_id_(unit_id), silence_(frame_silence(url)) {
-  if (url.transport == BenchUrl::Transport::kTcp) {
-    // _pi: resolves host names as well as addresses.
-    ctx_ = modbus_new_tcp_pi(url.host.c_str(), std::to_string(url.port).c_str());
-  } else {
-    ctx_ = modbus_new_rtu(url.device.c_str(), url.baud, url.parity, url.data_bits, url.stop_bits);
+// One open port (or socket) and what the silent interval needs to know of it.
+struct ModbusLink::Line {
+  modbus_t* ctx = nullptr;
+  bool connected = false;
+  std::chrono::steady_clock::time_point last_frame_end{};
+  BenchUrl settings;
+  ~Line() {
+    if (connected) modbus_close(ctx);
+    modbus_free(ctx);
   }
-  if (!ctx_) {
+};
+
+namespace {
+
+// The RTU lines open in this process, by device.
+std::map<std::string, std::weak_ptr<void>>& rtu_lines() {
+  static std::map<std::string, std::weak_ptr<void>> lines;
+  return lines;
+}
+
+bool same_serial_settings(const BenchUrl& a, const BenchUrl& b) {
+  return a.baud == b.baud && a.parity == b.parity && a.data_bits == b.data_bits &&
+         a.stop_bits == b.stop_bits;
+}
+
+}  // namespace
+
+ModbusLink::ModbusLink(const BenchUrl& url, int unit_id, std::chrono::milliseconds timeout)
+    : url_(url),
+      unit_id_(unit_id),
+      timeout_(std::chrono::duration_cast<std::chrono::microseconds>(timeout)),
+      silence_(frame_silence(url)) {
+  const bool rtu = url.transport == BenchUrl::Transport::kRtu;
+  if (rtu) {
+    if (auto shared = std::static_pointer_cast<Line>(rtu_lines()[url.device].lock())) {
+      if (!same_serial_settings(shared->settings, url)) {
+        throw ProfileError("bench URL " + url.str() + ": " + url.device +
+                           " is already in use at other serial settings (" +
+                           shared->settings.str() +
+                           "); expected the same baud, parity, data and stop bits for every "
+                           "drive on one line");
+      }
+      line_ = shared;
+      return;
+    }
+  }
+  line_ = std::make_shared<Line>();
+  line_->settings = url;
+  // _pi: resolves host names as well as addresses.
+  line_->ctx =
+      rtu ? modbus_new_rtu(url.device.c_str(), url.baud, url.parity, url.data_bits, url.stop_bits)
+          : modbus_new_tcp_pi(url.host.c_str(), std::to_string(url.port).c_str());
+  if (!line_->ctx) {
     throw ProfileError("bench URL " + url.str() +
                        ": libmodbus refused it: " + modbus_strerror(errno));
   }
-  modbus_set_slave(ctx_, unit_id);
-  const auto us = std::chrono::duration_cast<std::chrono::microseconds>(timeout).count();
-  modbus_set_response_timeout(ctx_, static_cast<uint32_t>(us / 1000000),
+  // No libmodbus error recovery: a reconnect must be followed by a state
+  // re-read, which only ModbusBench can do.
+  modbus_set_error_recovery(line_->ctx, MODBUS_ERROR_RECOVERY_NONE);
+  if (rtu) rtu_lines()[url.device] = line_;
+  select();
+}
+
+void ModbusLink::select() {
+  modbus_t* ctx = line_->ctx;
+  modbus_set_slave(ctx, unit_id_);
+  const auto us = timeout_.count();
+  modbus_set_response_timeout(ctx, static_cast<uint32_t>(us / 1000000),
                               static_cast<uint32_t>(us % 1000000));
   // The same bound on a gap inside a reply: libmodbus's own (500 ms) let a
   // drive that sent part of a frame hold every request for half a second,
   // whatever link.response_timeout_ms said.
-  modbus_set_byte_timeout(ctx_, static_cast<uint32_t>(us / 1000000),
+  modbus_set_byte_timeout(ctx, static_cast<uint32_t>(us / 1000000),
                           static_cast<uint32_t>(us % 1000000));
-  // No libmodbus error recovery: a reconnect must be followed by a state
-  // re-read, which only ModbusBench can do.
-  modbus_set_error_recovery(ctx_, MODBUS_ERROR_RECOVERY_NONE);
 }
 
-ModbusLink::~ModbusLink() {
-  close();
-  modbus_free(ctx_);
+// The line closes with its last link (Line's destructor).
+ModbusLink::~ModbusLink() = default;
+
+bool ModbusLink::connected() const {
+  return line_->connected;
 }
 
 int ModbusLink::connect() {
   close();
-  if (modbus_connect(ctx_) == -1) return errno;
-  connected_ = true;
+  if (modbus_connect(line_->ctx) == -1) return errno;
+  line_->connected = true;
   // A line just opened may carry the end of a frame: a silent interval first.
-  last_frame_end_ = std::chrono::steady_clock::now();
+  line_->last_frame_end = std::chrono::steady_clock::now();
   return 0;
 }
 
 void ModbusLink::close() {
-  if (connected_) modbus_close(ctx_);
-  connected_ = false;
+  if (line_->connected) modbus_close(line_->ctx);
+  line_->connected = false;
 }
 
 void ModbusLink::keep_silence() {
+  select();
   if (silence_.count() == 0) return;
-  const auto ready = last_frame_end_ + silence_;
+  const auto ready = line_->last_frame_end + silence_;
   if (std::chrono::steady_clock::now() < ready) std::this_thread::sleep_until(ready);
 }
 
@@ -75,19 +129,19 @@ std::optional<int> ModbusLink::probe_answering_unit() {
   const std::uint8_t request[] = {static_cast<std::uint8_t>(unit_id_), 0x03, 0, 0, 0, 1};
   keep_silence();
   std::optional<int> unit;
-  if (modbus_send_raw_request(ctx_, request, sizeof request) != -1) {
+  if (modbus_send_raw_request(line_->ctx, request, sizeof request) != -1) {
     std::uint8_t answer[MODBUS_RTU_MAX_ADU_LENGTH] = {};
     // libmodbus reads the whole frame, then refuses it for its unit id
     // (return 0 or -1); the frame's first byte is the unit that answered.
-    modbus_receive_confirmation(ctx_, answer);
+    modbus_receive_confirmation(line_->ctx, answer);
     if (answer[0] != 0 && answer[0] != unit_id_) unit = answer[0];
   }
-  last_frame_end_ = std::chrono::steady_clock::now();
+  line_->last_frame_end = std::chrono::steady_clock::now();
   return unit;
 }
 
 int ModbusLink::finish(int rc) {
-  last_frame_end_ = std::chrono::steady_clock::now();
+  line_->last_frame_end = std::chrono::steady_clock::now();
   if (rc != -1) return 0;
   const int err = errno;
   if (err == EMBBADSLAVE && url_.transport == BenchUrl::Transport::kRtu) {
@@ -98,21 +152,23 @@ int ModbusLink::finish(int rc) {
 }
 
 int ModbusLink::read(RegisterTable table, int address, int count, std::uint16_t* out) {
-  if (!connected_) return ENOTCONN;
+  if (!connected()) return ENOTCONN;
   keep_silence();
+  modbus_t* ctx = line_->ctx;
   const int rc = table == RegisterTable::kInput
-                     ? modbus_read_input_registers(ctx_, address, count, out)
-                     : modbus_read_registers(ctx_, address, count, out);
+                     ? modbus_read_input_registers(ctx, address, count, out)
+                     : modbus_read_registers(ctx, address, count, out);
   return finish(rc);
 }
 
 int ModbusLink::write(int address, int count, const std::uint16_t* values) {
-  if (!connected_) return ENOTCONN;
+  if (!connected()) return ENOTCONN;
   // Function 06 for one register, 16 for several: some drives accept only 06
   // on command registers.
   keep_silence();
-  const int rc = count == 1 ? modbus_write_register(ctx_, address, values[0])
-                            : modbus_write_registers(ctx_, address, count, values);
+  modbus_t* ctx = line_->ctx;
+  const int rc = count == 1 ? modbus_write_register(ctx, address, values[0])
+                            : modbus_write_registers(ctx, address, count, values);
   return finish(rc);
 }
 

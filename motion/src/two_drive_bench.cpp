@@ -89,13 +89,40 @@ void TwoDriveBench::move_to(double x_mm, double y_mm) {
                          fmt_mm(lim.y_min_mm) + ", " + fmt_mm(lim.y_max_mm) + "] mm of " +
                          profile_.source);
   }
-  x_->move_to(x_mm, 0);
+  // Both targets are written before either drive starts: a drive that
+  // refuses its target leaves both standing.
+  x_->write_target(x_mm, 0);
   try {
-    y_->move_to(y_mm, 0);
-  } catch (const BenchError&) {
-    stop_quietly(*x_, "the Y axis drive's move");
-    throw;
+    y_->write_target(y_mm, 0);
+  } catch (const BenchError& e) {
+    throw BenchWriteError(std::string(e.what()) +
+                          "; neither drive was started: " + holdings(*x_, "its new target") + "; " +
+                          holdings(*y_, "what the failed write left"));
   }
+  x_->start_move();
+  try {
+    y_->start_move();
+  } catch (const BenchError& e) {
+    stop_quietly(*x_, "the Y axis drive's start");
+    throw BenchWriteError(std::string(e.what()) + "; the X axis drive had started to " +
+                          fmt_mm(x_mm) + " mm and was stopped: " + holdings(*x_, "its new target") +
+                          "; " + holdings(*y_, "its new target"));
+  }
+}
+
+std::string TwoDriveBench::holdings(ModbusBench& d, const char* what) {
+  std::string s = d.where() + " ";
+  try {
+    s += "stands at " + fmt_mm(d.status().position.x_mm) + " mm";
+  } catch (const BenchError&) {
+    s += "position unreadable";
+  }
+  try {
+    s += ", its target registers hold " + fmt_mm(d.target_registers().x_mm) + " mm (" + what + ")";
+  } catch (const BenchError&) {
+    s += ", its target registers unreadable";
+  }
+  return s;
 }
 
 BenchStatus TwoDriveBench::wait_settled(milliseconds timeout) {
@@ -176,6 +203,9 @@ void TwoDriveBench::reset_alarm() {
 }
 
 void TwoDriveBench::set_speed(double speed_mm_s) {
+  // Checked on both before either takes it: one speed for both axes, or none.
+  x_->check_speed(speed_mm_s);
+  y_->check_speed(speed_mm_s);
   x_->set_speed(speed_mm_s);
   y_->set_speed(speed_mm_s);
 }

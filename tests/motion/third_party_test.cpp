@@ -296,6 +296,94 @@ class PtyPeer {
   std::thread thread_;
 };
 
+TEST_F(RtuOverPty, LinksToTwoUnitsOnOneDeviceShareOnePort) {
+  // Two drives on one RS-485 line: one open port, so that the silent
+  // interval is kept between frames to different units, and a port closed
+  // after a link error is closed for both.
+  const std::string line = "modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1";
+  motion::ModbusLink x(motion::BenchUrl::parse(line + "&unit=1"), 1, 200ms);
+  motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 200ms);
+  EXPECT_FALSE(y.connected());
+  ASSERT_EQ(x.connect(), 0);
+  EXPECT_TRUE(y.connected());
+  y.close();
+  EXPECT_FALSE(x.connected());
+  // Other serial settings on the same device are refused, naming both.
+  try {
+    motion::ModbusLink z(
+        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=19200&parity=E&unit=3"), 3,
+        200ms);
+    FAIL() << "a second link at 19200 baud joined a line at 9600 baud";
+  } catch (const motion::ProfileError& e) {
+    EXPECT_NE(std::string(e.what()).find(dir_ +
+                                         "/driver is already in use at other serial "
+                                         "settings (modbus-rtu://" +
+                                         dir_ + "/driver?baud=9600"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
+  // A real libmodbus RTU server at unit 1 stamps when its answer has gone and
+  // when each request has arrived, also one for unit 2, which nobody on the
+  // line answers. As below, a request to unit 2 that left the driver the
+  // silent interval after it received unit 1's answer arrives at least that
+  // long after the answer went, with no tolerance needed. With a port per
+  // unit, each knew only its own frames, so the request to unit 2 could
+  // follow unit 1's answer at once (and on a pty the second open of the
+  // device fails). (After a request for another unit a libmodbus
+  // server takes the next frame for that unit's answer and ignores it: a
+  // server per round.)
+  using Clock = std::chrono::steady_clock;
+  struct Frame {
+    int unit;  // of a request; 0 for an answer
+    Clock::time_point at;
+  };
+  std::mutex mutex;
+  std::vector<Frame> frames;
+  const std::string line = "modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1";
+  motion::ModbusLink x(motion::BenchUrl::parse(line + "&unit=1"), 1, 200ms);
+  // Unit 2 never answers: a short wait for it (it then closes the line).
+  motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 30ms);
+  modbus_mapping_t* map = modbus_mapping_new(0, 0, 16, 16);
+  for (int round = 0; round < 3; ++round) {
+    modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 9600, 'E', 8, 1);
+    ASSERT_NE(ctx, nullptr);
+    modbus_set_slave(ctx, 1);
+    ASSERT_EQ(modbus_connect(ctx), 0);
+    PtyPeer peer(ctx, [&](modbus_t* c) {
+      std::uint8_t query[MODBUS_RTU_MAX_ADU_LENGTH];
+      const int n = modbus_receive(c, query);  // 0: a whole request for another unit
+      const auto in = Clock::now();
+      if (n < 0) return;
+      std::lock_guard<std::mutex> lock(mutex);
+      frames.push_back({query[0], in});
+      if (n > 0) {
+        modbus_reply(c, query, n, map);
+        frames.push_back({0, Clock::now()});
+      }
+    });
+    std::uint16_t value = 0;
+    ASSERT_EQ(x.connect(), 0);
+    EXPECT_EQ(x.read(motion::RegisterTable::kHolding, 0, 1, &value), 0);
+    EXPECT_EQ(y.read(motion::RegisterTable::kHolding, 0, 1, &value), ETIMEDOUT);
+  }
+  modbus_mapping_free(map);
+  const auto silence = std::chrono::microseconds(4011);  // 3.5 characters at 9600 baud 8E1
+  int checked = 0;
+  for (std::size_t i = 1; i < frames.size(); ++i) {
+    if (frames[i - 1].unit != 0 || frames[i].unit != 2) continue;
+    ++checked;
+    EXPECT_GE(frames[i].at - frames[i - 1].at, silence)
+        << "the request to unit 2 came "
+        << std::chrono::duration_cast<std::chrono::microseconds>(frames[i].at - frames[i - 1].at)
+               .count()
+        << " us after unit 1's answer";
+  }
+  EXPECT_EQ(checked, 3);
+}
+
 TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // A real libmodbus RTU server (unit 1, every register kept) stamps when a
   // request has arrived and when its answer has gone. A request leaves the

@@ -204,6 +204,31 @@ TEST_F(TwoDrives, AYLinkThatStaysDownRaisesALinkErrorNamingTheYDrive) {
   EXPECT_NO_THROW(bench->x_drive().status());
 }
 
+TEST_F(TwoDrives, ASpeedOneDriveRefusesIsTakenByNeither) {
+  start();
+  auto bench = connect_one_port();
+  bench->home();
+  bench->wait_settled(kSettle);
+  // 0.04 mm/s is 4 units of the X drive's 0.01 mm/s, but rounds to 0 units
+  // of the Y drive's 0.1 mm/s: refused for the Y drive, so for the bench.
+  try {
+    bench->set_speed(0.04);
+    FAIL() << "a speed the Y drive cannot take was accepted";
+  } catch (const motion::SoftLimitError& e) {
+    EXPECT_NE(std::string(e.what()).find(url(x_port_) +
+                                         "?unit=2 (Y axis drive): speed 0.04 mm/s rounds to 0"),
+              std::string::npos)
+        << e.what();
+  }
+  // Both drives keep the profile's 100 mm/s: the next move writes it to each
+  // (X: 10000 x 0.01 mm/s, Y: 1000 x 0.1 mm/s). Had X taken 0.04 mm/s, this
+  // 1 mm move would take 25 s and time out.
+  bench->move_to(1, 1);
+  expect_at(bench->wait_settled(kSettle), 1, 1);
+  EXPECT_EQ(raw(x_port_, 1, false, 0x102, 1)[0], 10000);
+  EXPECT_EQ(raw(x_port_, 2, false, 0x12, 1)[0], 1000);
+}
+
 TEST_F(TwoDrives, AMoveOutsideTheBenchLimitsSendsNothingToEitherDrive) {
   start();
   auto bench = connect_one_port();
@@ -268,8 +293,8 @@ TEST(TwoDriveProfile, ShippedTemplateLoads) {
   EXPECT_EQ(p.axis_drives->y.drive.unit_id, 2);
 }
 
-// The drive-family profiles load and say what their header says; they are
-// not yet driven against an emulator of their manual's semantics.
+// The drive-family profiles load and say what their header says (they are
+// driven against an emulator of their semantics in drive_families_test.cpp).
 TEST(TwoDriveProfile, ShippedDriveFamilyProfilesLoad) {
   const motion::DriveProfile iai = motion::load_drive_profile(
       std::string(RIG_SOURCE_DIR) + "/config/benches/iai_pcon_two_axes.toml");

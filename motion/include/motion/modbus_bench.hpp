@@ -65,10 +65,26 @@ class ModbusBench : public DrivenBench {
   // not in (0, profile.max_speed_mm_s] (NaN included) or if it rounds to 0 in
   // the drive's units (profile.speed_units_per_mm_s).
   void set_speed(double speed_mm_s) override;
+  // What set_speed checks, without setting anything: throws SoftLimitError
+  // (naming this drive) for a speed set_speed refuses.
+  void check_speed(double speed_mm_s) const;
 
   const DriveProfile& profile() const override { return profile_; }
   // How many times the watchdog has re-established the link (for logs, tests).
   int reconnects() const override { return reconnects_; }
+
+  // The two steps of move_to, for a bench that moves several drives together
+  // (TwoDriveBench). write_target: refuses a target outside the soft limits
+  // (SoftLimitError, nothing sent), turns the servo on if the profile has
+  // one, then writes and verifies the target and speed registers without
+  // starting (BenchWriteError naming the registers and the drive's answer).
+  // start_move: starts the move to the target last written (BenchError if
+  // none was, BenchWriteError if the drive does not take the command).
+  void write_target(double x_mm, double y_mm);
+  void start_move();
+  // The target registers as the drive holds them now, mm ((x, 0) for a
+  // single-axis drive). Throws BenchError if they cannot be read.
+  XY target_registers();
 
   // The steps of wait_settled, for a bench that waits on several drives
   // (TwoDriveBench). checked_status: the status, or BenchFault on an alarm or
@@ -100,6 +116,9 @@ class ModbusBench : public DrivenBench {
   // last error, and what a person should check for it (link_hint).
   std::string link_down_message(const char* what, bool first, int err) const;
   std::string link_hint(int err) const;
+  // A target in counts, checked against the soft limits and quantized
+  // towards the inside; throws SoftLimitError.
+  std::array<std::int32_t, 2> target_counts(double x_mm, double y_mm) const;
   int read_feedback(BenchStatus& out);
   int read_targets(std::array<std::int32_t, 2>& counts);
   // Writes registers (address -> value), grouped into contiguous runs, and
@@ -135,6 +154,8 @@ class ModbusBench : public DrivenBench {
   Pending pending_ = Pending::kNone;
   std::optional<XY> target_mm_;
   std::array<std::int32_t, 2> target_counts_{};
+  // The target written by write_target and not yet started.
+  std::optional<std::array<std::int32_t, 2>> written_;
   bool homed_seen_ = false;
   bool servo_enabled_ = false;
   int reconnects_ = 0;

@@ -3,11 +3,18 @@
 // retry: the reconnect watchdog lives one level up, in ModbusBench, because
 // only the bench knows which state to re-read after a reconnect.
 //
-// Not thread-safe: one link, one thread.
+// Links to units on one serial device (two drives on one RS-485 line) share
+// one open port, one libmodbus context and one record of the last frame, so
+// that the silent interval is kept between frames to different units too;
+// each request addresses its own link's unit. Closing the port (after a link
+// error) closes it for every link on it; the next request of each reopens it.
+//
+// Not thread-safe: one link, one thread (the links sharing a line included).
 #pragma once
 
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 
@@ -20,8 +27,10 @@ namespace motion {
 
 class ModbusLink {
  public:
-  // Creates the context; does not connect. Throws ProfileError if libmodbus
-  // refuses the parameters (e.g. an unsupported baud rate).
+  // Creates the context, or for RTU joins the line another link holds open on
+  // the same device; does not connect. Throws ProfileError if libmodbus
+  // refuses the parameters (e.g. an unsupported baud rate), or if the device
+  // is in use by another link at other serial settings.
   ModbusLink(const BenchUrl& url, int unit_id, std::chrono::milliseconds response_timeout);
   ~ModbusLink();
   ModbusLink(const ModbusLink&) = delete;
@@ -32,7 +41,7 @@ class ModbusLink {
   // Closes the socket or serial port (idempotent). A closed link must be
   // connect()ed again; libmodbus never does it behind our back.
   void close();
-  bool connected() const { return connected_; }
+  bool connected() const;
 
   // Each returns 0 on success, or the errno (ETIMEDOUT, ECONNRESET, EPIPE,
   // EMBX* for a Modbus exception response, ...). A link error (see
@@ -63,7 +72,10 @@ class ModbusLink {
   int unit_id() const { return unit_id_; }
 
  private:
+  struct Line;
   int finish(int rc);
+  // Addresses this link's unit with its timeout on the (possibly shared) context.
+  void select();
   // Sleeps until frame_silence() has passed since the last frame ended.
   void keep_silence();
   // Asks the unit once more with a raw request and returns the unit id the
@@ -73,10 +85,9 @@ class ModbusLink {
 
   BenchUrl url_;
   int unit_id_;
-  modbus_t* ctx_ = nullptr;
-  bool connected_ = false;
+  std::chrono::microseconds timeout_;
+  std::shared_ptr<Line> line_;
   std::chrono::microseconds silence_{0};
-  std::chrono::steady_clock::time_point last_frame_end_{};
   std::optional<int> foreign_unit_;
 };
 

@@ -5,7 +5,13 @@
 //
 // What the bench does with two drives:
 //  - move_to checks the bench's soft limits before anything is sent to either
-//    drive, then writes and starts X, then Y; home() starts both homing;
+//    drive, then writes both drives' targets, then starts X, then Y. A drive
+//    that refuses its target leaves both standing; a Y drive that does not
+//    start has X stopped. Either raises BenchWriteError with the drive's
+//    answer and, for each drive, where it stands and what its target
+//    registers hold. home() starts both homing;
+//  - set_speed checks the speed against both drives before either takes it:
+//    both keep the old speed when one refuses (SoftLimitError naming it);
 //  - wait_settled polls both drives and returns once both are settled
 //    together for the shared settle time; an alarm or emergency stop on one
 //    drive stops the other and raises BenchFault naming the drive
@@ -25,6 +31,7 @@
 
 #include <chrono>
 #include <memory>
+#include <string>
 
 #include "motion/driven_bench.hpp"
 #include "motion/modbus_bench.hpp"
@@ -56,6 +63,9 @@ class TwoDriveBench : public DrivenBench {
   // Stops `other` after `failed` raised, logging (not raising) what the stop
   // itself raises.
   static void stop_quietly(ModbusBench& other, const char* why);
+  // "DRIVE stands at P mm, its target registers hold T mm (what)", read
+  // from the drive, for the message of a move that reached one drive only.
+  static std::string holdings(ModbusBench& d, const char* what);
 
   DriveProfile profile_;
   std::unique_ptr<ModbusBench> x_;
