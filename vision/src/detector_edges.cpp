@@ -22,6 +22,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <algorithm>
+#include <cmath>
 
 #include "detector_internal.hpp"
 
@@ -37,7 +38,9 @@ struct Line {
 
 struct Sample {
   Eigen::Vector2d point_norm = Eigen::Vector2d::Zero();  // edge point, normalized plane
-  // Image displacement of a unit normalized step along the line normal (J n).
+  // d(pixel)/d(normalized point) at the sample's point on the side, and the
+  // image displacement of a unit normalized step along the line normal (J n).
+  Eigen::Matrix2d jacobian = Eigen::Matrix2d::Identity();
   Eigen::Vector2d jac_normal = Eigen::Vector2d::Zero();
   double step = 0;  // dark-to-bright step of the profile, grey levels
   bool valid = false;
@@ -90,9 +93,8 @@ bool edge_window(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eigen
 
 // Equal-area edge position on a profile starting at s0 (see the file comment),
 // with the end levels averaged over the outer `ends` samples of each side.
-// Returns false when the profile does not rise.
-bool equal_area_edge(const std::vector<double>& v, double s0, double* s_edge, double* step) {
-  const int n = static_cast<int>(v.size());
+// Returns false when the profile (n values from v) does not rise.
+bool equal_area_edge(const double* v, int n, double s0, double* s_edge, double* step) {
   constexpr int ends = 2;
   double lo = 0, hi = 0;
   for (int j = 0; j < ends; ++j) {
@@ -183,21 +185,36 @@ SideSampling plan_side(const Eigen::Vector2d& n0, const Eigen::Vector2d& n1, dou
 bool locate_edge(const cv::Mat& gray, const Eigen::Vector2d& px, const Eigen::Vector2d& normal,
                  const SideSampling& side, double inner, const DetectorParameters& p,
                  const std::vector<double>& profile, double* s_edge, double* step) {
-  if (!side.first_pass) return equal_area_edge(profile, -inner, s_edge, step);
+  if (!side.first_pass)
+    return equal_area_edge(profile.data(), static_cast<int>(profile.size()), -inner, s_edge, step);
   int best = 0;
   double best_d = -1;
   for (size_t i = 0; i + 1 < profile.size(); ++i) {
     const double d = profile[i + 1] - profile[i];
     if (d > best_d) best_d = d, best = static_cast<int>(i);
   }
-  const double s_peak = -inner + (best + 0.5) * kProfileStepPx;
+  // The window is centred on the profile sample after the steepest rise (on
+  // the profile's own grid, half a step past the rise's midpoint: the
+  // equal-area position does not depend on where the window is centred as
+  // long as it spans the edge), so when it lies inside the wide profile its
+  // samples are the profile's own and nothing is read twice.
+  const int centre = best + 1;
+  const int half = static_cast<int>(std::lround(p.edge_refine_px / kProfileStepPx));
+  const double s_peak = -inner + centre * kProfileStepPx;
+  if (centre - half >= 0 && centre + half < static_cast<int>(profile.size())) {
+    const bool ok = equal_area_edge(profile.data() + (centre - half), 2 * half + 1,
+                                    -half * kProfileStepPx, s_edge, step);
+    *s_edge += s_peak;
+    return ok;
+  }
   const Eigen::Vector2d c = px + s_peak * normal;
   double window_inner = 0, window_outer = 0;
   if (!edge_window(gray, c, normal, p.edge_refine_px, p, &window_inner, &window_outer))
     return false;
   std::vector<double> window;
   read_profile(gray, c, normal, window_inner, window_outer, &window);
-  const bool ok = equal_area_edge(window, -window_inner, s_edge, step);
+  const bool ok =
+      equal_area_edge(window.data(), static_cast<int>(window.size()), -window_inner, s_edge, step);
   *s_edge += s_peak;
   return ok;
 }
@@ -231,6 +248,7 @@ EdgeFitStatus sample_side(const cv::Mat& gray, const Camera& camera, const SideS
     const Eigen::Matrix2d j_inv = j.inverse();
     Sample& s = (*samples)[k];
     s.point_norm = pn + j_inv * (s_edge * normal);
+    s.jacobian = j;
     s.jac_normal = normal;  // replaced once the line normal is known
     s.step = step;
     s.valid = true;
@@ -258,7 +276,7 @@ bool drop_weak_samples(const DetectorParameters& p, std::vector<Sample>* samples
 // from the contour polygon, whose corners may be a few pixels off, so that
 // samples near a corner can fall beyond the marker: it only needs a line
 // through most of the side (residual x 2). False when too few samples remain.
-bool fit_robust_line(const Camera& camera, const SideSampling& side, const DetectorParameters& p,
+bool fit_robust_line(const SideSampling& side, const DetectorParameters& p,
                      std::vector<Sample>* samples, Line* line) {
   const double max_residual = (side.first_pass ? 2 : 1) * p.max_sample_residual_px;
   for (int round = 0; round < 3; ++round) {
@@ -268,7 +286,7 @@ bool fit_robust_line(const Camera& camera, const SideSampling& side, const Detec
     for (int k = 0; k < side.m; ++k) {
       Sample& s = (*samples)[k];
       if (!s.valid) continue;
-      s.jac_normal = camera.distort_jacobian(side.point(k)) * line->normal;
+      s.jac_normal = s.jacobian * line->normal;
       if (std::abs(residual_px(s, *line)) > max_residual) s.valid = false, changed = true;
     }
     if (!changed) break;
@@ -308,7 +326,7 @@ SideFit fit_side(const cv::Mat& gray, const Camera& camera, const Eigen::Vector2
   out.status = EdgeFitStatus::kSideNotSupported;
   if (!drop_weak_samples(p, &samples)) return out;
   Line line;
-  if (!fit_robust_line(camera, side, p, &samples, &line)) return out;
+  if (!fit_robust_line(side, p, &samples, &line)) return out;
   int valid = 0;
   if (!side_supported(samples, side, length_px, p, &valid)) return out;
   out.line = line;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <cmath>
+#include <utility>
 
 #include "vision/pose_analytic.hpp"
 
@@ -21,57 +22,135 @@ Vector6d state_from_pose(const Pose& T) {
 }
 
 // The difference of two states with the angles wrapped to (-pi, pi], so that a
-// prior at psi = pi and a state at -pi are not 2 pi apart.
+// prior at psi = pi and a state at -pi are not 2 pi apart: std::remainder(d,
+// 2 pi), with its two common cases written out. For |d| <= pi it is d; for
+// pi < |d| < 3 pi it is d -+ 2 pi, which is exact in floating point (Sterbenz:
+// d and 2 pi are within a factor of 2), so all three give the same bits.
 Vector6d state_difference(const Vector6d& a, const Vector6d& b) {
+  constexpr double two_pi = 2.0 * M_PI;
   Vector6d d = a - b;
-  for (int k = 0; k < 3; ++k)
-    d(k) = std::remainder(d(k), 2.0 * M_PI);
+  for (int k = 0; k < 3; ++k) {
+    const double m = std::abs(d(k));
+    if (m <= M_PI) continue;
+    d(k) = m < 3 * M_PI ? d(k) - std::copysign(two_pi, d(k)) : std::remainder(d(k), two_pi);
+  }
   return d;
 }
 
 // Eqs. 15-17 and 29: the measurement residual z - h(x) (undistorted pixels)
 // and its Jacobian H = dh/dx, accumulated straight into H^T H and H^T r (the
-// only products the update needs). With R = Rz(psi) Ry(theta) Rx(phi):
-// dR/dpsi P = e_z x (R P), dR/dtheta P = Rz (e_y x (Ry Rx P)), dR/dphi P = R (e_x x P).
+// only products the update needs). With R = Rz(psi) Ry(theta) Rx(phi) and
+// Q = Ry Rx P: dR/dpsi P = e_z x (R P) = (-(RP)_y, (RP)_x, 0),
+// dR/dtheta P = Rz (e_y x Q) = (cos psi Q_z, sin psi Q_z, -Q_x),
+// dR/dphi P = R (e_x x P) = R (0, -P_z, P_y). The two rows of dh/dp are
+// fx/z (1, 0, -u) and fy/z (0, 1, -v) (u, v the projected point), so each row
+// of H is a handful of products, accumulated at fixed size.
 // Returns false when a point is on or behind the camera.
 bool measurement(const Correspondences& c, const Vector6d& x, Matrix6d* HtH, Vector6d* Htr,
                  double* residual_squared) {
   const Intrinsics& k = c.camera->intrinsics();
   const double cz = std::cos(x(0)), sz = std::sin(x(0)), cy = std::cos(x(1)), sy = std::sin(x(1)),
                cx = std::cos(x(2)), sx = std::sin(x(2));
-  Eigen::Matrix3d Rz, Ry, Rx;
-  Rz << cz, -sz, 0, sz, cz, 0, 0, 0, 1;
-  Ry << cy, 0, sy, 0, 1, 0, -sy, 0, cy;
-  Rx << 1, 0, 0, 0, cx, -sx, 0, sx, cx;
-  const Eigen::Matrix3d RyRx = Ry * Rx;
-  const Eigen::Matrix3d R = Rz * RyRx;
-  HtH->setZero();
-  Htr->setZero();
-  *residual_squared = 0;
+  // Ry Rx and R = Rz Ry Rx, written out.
+  Eigen::Matrix3d RyRx, R;
+  RyRx << cy, sy * sx, sy * cx, 0, cx, -sx, -sy, cy * sx, cy * cx;
+  R.row(0) = cz * RyRx.row(0) - sz * RyRx.row(1);
+  R.row(1) = sz * RyRx.row(0) + cz * RyRx.row(1);
+  R.row(2) = RyRx.row(2);
+  const Eigen::Vector3d t = x.tail<3>();
+  Matrix6d A = Matrix6d::Zero();
+  Vector6d g = Vector6d::Zero();
+  double sum_sq = 0;
   for (size_t i = 0; i < c.size(); ++i) {
     const Eigen::Vector3d& P = c.object_points[i];
-    const Eigen::Vector3d RP = R * P;
-    const Eigen::Vector3d p = RP + x.tail<3>();
+    const Eigen::Vector3d Q = RyRx * P;
+    const Eigen::Vector3d RP(cz * Q.x() - sz * Q.y(), sz * Q.x() + cz * Q.y(), Q.z());
+    const Eigen::Vector3d p = RP + t;
     if (!(p.z() > 0)) return false;
     const double inv_z = 1.0 / p.z();
+    const double u = p.x() * inv_z, v = p.y() * inv_z;
     // Observed undistorted pixel minus predicted pixel.
-    const Eigen::Vector2d r(k.fx * (c.normalized[i].x() - p.x() * inv_z),
-                            k.fy * (c.normalized[i].y() - p.y() * inv_z));
-    Eigen::Matrix<double, 2, 3> dh_dp;
-    dh_dp << k.fx * inv_z, 0, -k.fx * p.x() * inv_z * inv_z, 0, k.fy * inv_z,
-        -k.fy * p.y() * inv_z * inv_z;
-    Eigen::Matrix3d dp_dangles;
-    dp_dangles.col(0) = Eigen::Vector3d::UnitZ().cross(RP);
-    dp_dangles.col(1) = Rz * Eigen::Vector3d::UnitY().cross(RyRx * P);
-    dp_dangles.col(2) = R * Eigen::Vector3d::UnitX().cross(P);
-    Eigen::Matrix<double, 2, 6> H;
-    H.leftCols<3>() = dh_dp * dp_dangles;
-    H.rightCols<3>() = dh_dp;
-    *HtH += H.transpose() * H;
-    *Htr += H.transpose() * r;
-    *residual_squared += r.squaredNorm();
+    const double r0 = k.fx * (c.normalized[i].x() - u), r1 = k.fy * (c.normalized[i].y() - v);
+    const Eigen::Vector3d d_phi = R.col(2) * P.y() - R.col(1) * P.z();
+    const double ax = k.fx * inv_z, by = k.fy * inv_z;
+    // The two rows of H: d(u, v)/d(psi, theta, phi, tx, ty, tz), pixels.
+    Vector6d h0, h1;
+    h0 << ax * (-RP.y()), ax * (cz * Q.z() + u * Q.x()), ax * (d_phi.x() - u * d_phi.z()), ax, 0,
+        -ax * u;
+    h1 << by * RP.x(), by * (sz * Q.z() + v * Q.x()), by * (d_phi.y() - v * d_phi.z()), 0, by,
+        -by * v;
+    // One outer product at a time: Eigen evaluates each in place, column by
+    // column in packed (SIMD) pairs, with no temporary.
+    A.noalias() += h0 * h0.transpose();
+    A.noalias() += h1 * h1.transpose();
+    g += r0 * h0;
+    g += r1 * h1;
+    sum_sq += r0 * r0 + r1 * r1;
   }
+  *HtH = A;
+  *Htr = g;
+  *residual_squared = sum_sq;
   return true;
+}
+
+// The inverse of a symmetric 3x3 matrix in closed form (adjugate over
+// determinant); false when it is not invertible.
+bool inverse3_symmetric(const Eigen::Matrix3d& m, Eigen::Matrix3d* inv) {
+  const double c00 = m(1, 1) * m(2, 2) - m(1, 2) * m(1, 2);
+  const double c01 = m(0, 2) * m(1, 2) - m(0, 1) * m(2, 2);
+  const double c02 = m(0, 1) * m(1, 2) - m(0, 2) * m(1, 1);
+  const double det = m(0, 0) * c00 + m(0, 1) * c01 + m(0, 2) * c02;
+  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+  const double s = 1.0 / det;
+  const double c11 = m(0, 0) * m(2, 2) - m(0, 2) * m(0, 2);
+  const double c12 = m(0, 1) * m(0, 2) - m(0, 0) * m(1, 2);
+  const double c22 = m(0, 0) * m(1, 1) - m(0, 1) * m(0, 1);
+  *inv << c00 * s, c01 * s, c02 * s, c01 * s, c11 * s, c12 * s, c02 * s, c12 * s, c22 * s;
+  return true;
+}
+
+// A symmetric positive-definite 6x6 system in 3x3 blocks (angles, translation),
+// A = [A11 A12; A12^T A22], eliminated through the Schur complement
+// S = A22 - A12^T A11^-1 A12 with both 3x3 inverses in closed form: no
+// pivoting (the blocks of a positive-definite matrix and its Schur complement
+// are positive definite), two divisions, short dependency chains.
+struct Spd6 {
+  Eigen::Matrix3d inv11, inv_schur, W;  // W = A11^-1 A12
+  Eigen::Matrix3d A21;
+  bool ok = false;
+
+  explicit Spd6(const Matrix6d& A) {
+    const Eigen::Matrix3d A11 = A.topLeftCorner<3, 3>();
+    A21 = A.bottomLeftCorner<3, 3>();
+    if (!inverse3_symmetric(A11, &inv11)) return;
+    W = inv11 * A21.transpose();
+    const Eigen::Matrix3d schur = A.bottomRightCorner<3, 3>() - A21 * W;
+    ok = inverse3_symmetric(schur, &inv_schur);
+  }
+  Vector6d solve(const Vector6d& b) const {
+    const Eigen::Vector3d y1 = inv11 * b.head<3>();
+    const Eigen::Vector3d x2 = inv_schur * (b.tail<3>() - A21 * y1);
+    Vector6d x;
+    x << y1 - W * x2, x2;
+    return x;
+  }
+};
+
+// A^-1 b for the symmetric positive-definite A (LDLT when a block is singular).
+Vector6d solve_spd(const Matrix6d& A, const Vector6d& b) {
+  const Spd6 blocks(A);
+  if (blocks.ok) return blocks.solve(b);
+  return A.ldlt().solve(b);
+}
+
+// A^-1 of the symmetric positive-definite A, column by column.
+Matrix6d inverse_spd(const Matrix6d& A) {
+  const Spd6 blocks(A);
+  if (!blocks.ok) return A.ldlt().solve(Matrix6d::Identity());
+  Matrix6d inverse;
+  for (int j = 0; j < 6; ++j)
+    inverse.col(j) = blocks.solve(Vector6d::Unit(j));
+  return inverse;
 }
 
 Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
@@ -108,8 +187,7 @@ struct MapCost {
 
 MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
                  const EkfOptions& options) {
-  const Eigen::LDLT<Matrix6d> prior_ldlt(prior_covariance);
-  return {c, state_from_pose(prior), prior_ldlt.solve(Matrix6d::Identity()),
+  return {c, state_from_pose(prior), inverse_spd(prior_covariance),
           1.0 / (options.measurement_sigma_px * options.measurement_sigma_px)};
 }
 
@@ -122,8 +200,7 @@ struct Damping {
 
 struct DampedStep {
   Vector6d step = Vector6d::Zero();  // not finite when the damped system is singular
-  bool accepted = false;             // it lowers the cost; `next` is the state it reaches
-  Linearisation next;
+  bool accepted = false;             // it lowers the cost; `*next` is the state it reaches
 };
 
 // The least-damped step from x that lowers the cost (`at` is the system at
@@ -131,21 +208,26 @@ struct DampedStep {
 // to the predicted decrease of the cost (the model is cost - 2 s.g + s.I.s)
 // sets the damping by Nielsen's rule (Madsen, Nielsen & Tingleff 2004, eq.
 // 2.21), which stops the zig-zag of full steps across the curved valley
-// between planar poses.
+// between planar poses. `next` receives the system at x + step (written in
+// place: the caller swaps it with `at`, no 6x6 copies per iteration).
 DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisation& at,
-                       const Matrix6d& information, const Vector6d& gradient, Damping* damping) {
+                       const Matrix6d& information, const Vector6d& gradient, Damping* damping,
+                       Linearisation* next) {
   DampedStep out;
   while (damping->lambda <= 1e10) {
     Matrix6d damped = information;
     damped.diagonal() *= 1.0 + damping->lambda;
-    out.step = damped.ldlt().solve(gradient);
+    out.step = solve_spd(damped, gradient);
     if (!out.step.allFinite()) break;
     const double predicted = 2 * out.step.dot(gradient) - out.step.dot(information * out.step);
-    if (map.evaluate(x + out.step, &out.next) && out.next.cost <= at.cost && predicted > 0) {
-      const double gain = (at.cost - out.next.cost) / predicted;
+    // A step the model does not predict to lower the cost is refused without
+    // evaluating it.
+    if (predicted > 0 && map.evaluate(x + out.step, next) && next->cost <= at.cost) {
+      const double gain = (at.cost - next->cost) / predicted;
       if (gain > 0) {
         out.accepted = true;
-        damping->lambda *= std::max(1.0 / 3.0, 1.0 - std::pow(2 * gain - 1, 3));
+        const double ratio = 2 * gain - 1;
+        damping->lambda *= std::max(1.0 / 3.0, 1.0 - ratio * ratio * ratio);
         damping->growth = 2;
         break;
       }
@@ -201,20 +283,21 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   Estimate e;
   Vector6d x = map.x_prior;
   Matrix6d information = map.prior_information;
-  Linearisation at;
+  Linearisation systems[2];
+  Linearisation *at = &systems[0], *next = &systems[1];
   Damping damping;
   e.termination = Termination::kMaxIterations;
-  if (!map.evaluate(x, &at)) {
+  if (!map.evaluate(x, at)) {
     e.termination = Termination::kBehindCamera;
     e.message = "the prior state puts an object point behind the camera";
   }
   for (int it = 1; it <= options.max_iterations && e.termination == Termination::kMaxIterations;
        ++it) {
     e.iterations = it;
-    information = map.prior_information + map.inv_r * at.HtH;
+    information = map.prior_information + map.inv_r * at->HtH;
     const Vector6d gradient =
-        map.inv_r * at.Htr - map.prior_information * state_difference(x, map.x_prior);
-    DampedStep d = damped_step(map, x, at, information, gradient, &damping);
+        map.inv_r * at->Htr - map.prior_information * state_difference(x, map.x_prior);
+    const DampedStep d = damped_step(map, x, *at, information, gradient, &damping, next);
     if (!d.step.allFinite()) {
       e.termination = Termination::kNumericalFailure;
       e.message = "the measurement update is singular";
@@ -228,10 +311,10 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
       break;
     }
     x += d.step;
-    at = d.next;
+    std::swap(at, next);
   }
   e.T_cam_target = pose_from_state(x);
-  e.covariance = information.ldlt().solve(Matrix6d::Identity());
+  e.covariance = inverse_spd(information);
   settle_termination(c, x, options, &e);
   return e;
 }

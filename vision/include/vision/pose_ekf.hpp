@@ -41,7 +41,7 @@ struct EkfOptions {
   double process_sigma_translation_m = 1e-5;
   // Iterated-update cap and stopping rule: stop when the state step is below
   // this (radians / metres). 1e-7 (0.1 µrad, 0.1 µm) is far below any pose
-  // noise of the rig; each further decade costs ~0.6 iterations (~0.7 µs)
+  // noise of the rig; each further decade costs ~0.6 iterations (~0.3 µs)
   // for digits no measurement has.
   int max_iterations = 100;
   double state_tolerance = 1e-7;
