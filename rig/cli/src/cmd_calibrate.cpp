@@ -23,7 +23,7 @@ struct CalibrateArgs {
   std::string database;
   std::string out_dir;
   std::vector<std::string> fixed;
-  std::string distortion = "thin_prism";
+  std::string distortion = "5";
   double huber_px = 1.0;
   int threads = 2;
 };

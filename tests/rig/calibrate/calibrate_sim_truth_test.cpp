@@ -1,14 +1,14 @@
 // rig::calibrate against the simulated rig's hidden truth: for each of ten
 // truth seeds of the `lab` realism profile (camera, lens with thin-prism
-// terms, mount, target pose and print scale drawn by sim::camera), the
+// and radial r^8 terms, mount, target pose and print scale drawn by
+// sim::camera), the
 // shipped calibration plan and A3 target rendered by the real renderer and
 // detected by the real detector with the nominal calibration
 // (tests/rig/calibrate/sim_truth_calibration.hpp), calibrated, compared with
-// the truth the simulator rendered with. Every other plan position (111 of
-// 221, one frame each, ~8,500 corners per seed) keeps the ten seeds at about
-// 25 s of CPU; on the whole plan the figures are the same to within the
-// spread quoted below (measured: worst fx 0.0015 %, cx 0.155 px, pitch
-// 0.0083 deg, yaw 0.0123 deg, distance 7.0 um).
+// the truth the simulator rendered with, under both lens models of rig
+// calibrate (--distortion 5 and thin_prism). Every other plan position (111
+// of 221, one frame each, ~8,500 corners per seed) keeps the ten seeds and
+// both models at about 35 s of CPU.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -34,14 +34,17 @@ constexpr int kSeeds = 10;
 // camera-to-target at bench zero, m. Stated: the calibration's own sd.
 struct SeedErrors {
   std::map<std::string, double> error, stated_sd;
+  double sigma_px = 0;  // the fit's residual scale
 };
 
 // One seed's calibration sweep: every other plan position, one frame.
-rig_test::SimTruthSweep render_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) {
+rig_test::SimTruthSweep render_seed(std::uint64_t seed, std::optional<double> bow_sag_mm,
+                                    std::optional<double> radial_k4 = std::nullopt) {
   rig_test::SimTruthSweepSpec spec;
   spec.source_dir = RIG_SOURCE_DIR;
   spec.truth_seed = seed;
   spec.bow_sag_mm = bow_sag_mm;
+  spec.radial_k4 = radial_k4;
   spec.position_stride = 2;
   return rig_test::render_calibration_sweep(spec);
 }
@@ -59,6 +62,7 @@ SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel
   const vision::Distortion& d = r.camera.distortion();
   const std::array<double, 4>& s = sweep.truth.thin_prism;
   SeedErrors e;
+  e.sigma_px = r.sigma_px;
   e.error = {{"fx", k.fx / t.fx - 1},
              {"fy", k.fy / t.fy - 1},
              {"cx", k.cx - t.cx},
@@ -107,7 +111,7 @@ SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel
 }
 
 SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) {
-  return calibrate_sweep(render_seed(seed, bow_sag_mm), DistortionModel::kThinPrism);
+  return calibrate_sweep(render_seed(seed, bow_sag_mm), CalibrationOptions{}.distortion);
 }
 
 // The brief's targets (fx, fy 0.02 %, principal point 0.2 px, camera
@@ -159,22 +163,127 @@ struct OverSeeds {
                   name.c_str(), mean, worst(name), spread, has_sd ? spread_over_stated(name) : 0.0);
     }
   }
+  double mean(const std::string& name) const {
+    double m = 0;
+    for (const double v : errors.at(name))
+      m += v / static_cast<double>(errors.at(name).size());
+    return m;
+  }
+  // The mean error in standard errors of the mean (spread / sqrt(seeds)).
+  double mean_in_standard_errors(const std::string& name) const {
+    const double spread = db::stats::summarize(errors.at(name)).sd;
+    return std::abs(mean(name)) / (spread / std::sqrt(static_cast<double>(kSeeds)));
+  }
 };
 
+// Both lens models on the same renders of the ten truths. The targets (fx,
+// fy 0.02 %, principal point 0.2 px, camera rotation 0.005 deg per axis,
+// distance at bench zero 20 um) are asserted where met; elsewhere the
+// measured bound or the stated standard deviation:
+//  - the 5-coefficient model (the default): the lens's thin prism (lab:
+//    s1 = 1e-4, s3 = -5e-5) bends the image like a small rotation combined
+//    with a principal-point shift, along the two nearly degenerate
+//    directions of a bench that never moves vertically (docs/calibration.md):
+//    every seed shows nearly the same cx +0.14 px with yaw +0.011 deg (0.011
+//    deg x fx 720 px = 0.14 px) and cy -0.08 px with pitch +0.006 deg, a
+//    common bias 17 to 86 standard errors of the mean from 0 (asserted > 10).
+//    Bounds: the worst measured (pitch 0.0082, yaw 0.0123 deg) plus ~20 %.
+//  - the thin prism fitted: that bias goes (each mean error within 3
+//    standard errors of 0; measured 0.9-2.4), but s1 and s3 take the
+//    perspective terms that told the rotation from the principal point:
+//    correlations yaw-s1 -0.99, pitch-s3 +0.95, so pitch, yaw and cy scatter
+//    by their stated sd (~0.010 deg, 0.13 px) and are checked against 4
+//    stated sd per seed (a Gaussian exceeds it with probability 6e-5).
+//  - the print scale: within 3.5e-6 of the truth (the bias of the
+//    detector's corners at 0.7 px of blur); bound 1e-5.
+// The sheet is rendered flat here: its bow (next test) is outside every
+// file's model, the calibration's and the truth's alike.
 TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
   OverSeeds five, prism;
+  std::vector<SeedErrors> prism_seeds;
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
     const rig_test::SimTruthSweep sweep = render_seed(seed, 0.0);
     five.add(calibrate_sweep(sweep, DistortionModel::kBrownConrady5));
-    prism.add(calibrate_sweep(sweep, DistortionModel::kThinPrism));
+    prism_seeds.push_back(calibrate_sweep(sweep, DistortionModel::kThinPrism));
+    prism.add(prism_seeds.back());
   }
   five.print("5");
   prism.print("thin_prism");
-  const std::map<std::string, double> bound = {
+  const std::map<std::string, double> five_bound = {
       {"fx", 2e-4},      {"fy", 2e-4},    {"cx", 0.2},         {"cy", 0.2},    {"roll", 0.005},
       {"pitch", 0.0105}, {"yaw", 0.0150}, {"distance", 20e-6}, {"scale", 1e-5}};
-  for (const auto& [name, b] : bound)
-    EXPECT_LT(prism.worst(name), b) << name;
+  for (const auto& [name, b] : five_bound)
+    EXPECT_LT(five.worst(name), b) << "5 coefficients: " << name;
+  for (const char* name : {"pitch", "yaw", "cx", "cy"}) {
+    EXPECT_GT(five.mean_in_standard_errors(name), 10) << "5 coefficients: " << name;
+    EXPECT_LT(prism.mean_in_standard_errors(name), 3) << "thin prism: " << name;
+  }
+  const std::map<std::string, double> prism_bound = {{"fx", 2e-4},        {"fy", 2e-4},
+                                                     {"cx", 0.2},         {"roll", 0.005},
+                                                     {"distance", 20e-6}, {"scale", 1e-5}};
+  for (const auto& [name, b] : prism_bound)
+    EXPECT_LT(prism.worst(name), b) << "thin prism: " << name;
+  for (const SeedErrors& e : prism_seeds)
+    for (const char* name : {"pitch", "yaw", "cy", "s1", "s2", "s3", "s4"})
+      EXPECT_LT(std::abs(e.error.at(name)), 4 * e.stated_sd.at(name)) << "thin prism: " << name;
+
+  // Stated sd against the spread of the errors over the ten seeds (each seed
+  // draws its own truth and sensor noise): within the brief's factor 2 where
+  // measured so (5: fx, fy, cx, yaw, roll, 0.59-1.97; thin prism: fx, fy,
+  // cy, pitch, s2..s4, 0.67-1.76). Below it elsewhere (5: cy, pitch, scale
+  // 0.38-0.45; thin prism: cx, yaw, roll, s1, scale 0.38-0.50): the stated
+  // sd is larger than the spread, because the corner errors are not the
+  // independent noise the covariance assumes. The residual (sigma ~0.012
+  // px) is mostly deterministic, the detector's corner bias under 0.7 px of
+  // blur, the same shape in every seed, so it inflates the stated sd of the
+  // weakly determined directions while adding the same error to every seed
+  // rather than spread. Those are checked against their measured range with
+  // ~30 % margin.
+  const std::pair<double, double> factor_2{0.5, 2.0}, below{0.25, 0.65};
+  const std::map<std::string, std::pair<double, double>> five_ratio = {
+      {"fx", factor_2},   {"fy", factor_2}, {"cx", factor_2}, {"yaw", factor_2},
+      {"roll", factor_2}, {"cy", below},    {"pitch", below}, {"scale", below}};
+  const std::map<std::string, std::pair<double, double>> prism_ratio = {
+      {"fx", factor_2}, {"fy", factor_2}, {"cy", factor_2}, {"pitch", factor_2},
+      {"s2", factor_2}, {"s3", factor_2}, {"s4", factor_2}, {"cx", below},
+      {"yaw", below},   {"roll", below},  {"s1", below},    {"scale", below}};
+  for (const auto& [name, range] : five_ratio) {
+    EXPECT_GT(five.spread_over_stated(name), range.first) << "5 coefficients: " << name;
+    EXPECT_LT(five.spread_over_stated(name), range.second) << "5 coefficients: " << name;
+  }
+  for (const auto& [name, range] : prism_ratio) {
+    EXPECT_GT(prism.spread_over_stated(name), range.first) << "thin prism: " << name;
+    EXPECT_LT(prism.spread_over_stated(name), range.second) << "thin prism: " << name;
+  }
+}
+
+// The lab lens's radial r^8 term (config/realism/lab.toml radial_k4 = 0.02,
+// 0.29 px at the image corner) is beyond every model rig calibrate fits,
+// but k1..k3 absorb most of it: rendered with and without it (seeds 1-2,
+// the default model), the fit's residual grows by less than a third of
+// itself in quadrature (the term's share of the residual; measured 0.0000
+// and 0.0007 px of 0.012 px), cx, cy, pitch and yaw move by less than their
+// stated sd: the detector's corner bias, not the unfitted lens term,
+// dominates what the fit leaves.
+TEST(CalibrateSimTruth, TheUnfittedRadialR8TermStaysBelowTheOtherResiduals) {
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    const DistortionModel model = CalibrationOptions{}.distortion;
+    const SeedErrors with = calibrate_sweep(render_seed(seed, 0.0), model);
+    const SeedErrors without = calibrate_sweep(render_seed(seed, 0.0, 0.0), model);
+    const double share = std::sqrt(
+        std::max(0.0, with.sigma_px * with.sigma_px - without.sigma_px * without.sigma_px));
+    std::printf("seed %d: sigma %.5f px with r^8, %.5f without; its share %.5f px\n",
+                static_cast<int>(seed), with.sigma_px, without.sigma_px, share);
+    EXPECT_LT(share, with.sigma_px / 3) << "seed " << seed;
+    for (const char* name : {"cx", "cy", "pitch", "yaw"})
+      EXPECT_LT(std::abs(with.error.at(name) - without.error.at(name)), with.stated_sd.at(name))
+          << name << " seed " << seed;
+    // k1..k3 absorb the r^8 term partly by a scale change: fx and fy move by
+    // 0.0008-0.0009 % (measured), a 25th of the 0.02 % target; bound a tenth.
+    for (const char* name : {"fx", "fy"})
+      EXPECT_LT(std::abs(with.error.at(name) - without.error.at(name)), 2e-5)
+          << name << " seed " << seed;
+  }
 }
 
 // The lab sheet bows towards the camera by bow_sag_mm at its centre (a dome
@@ -234,10 +343,11 @@ TEST(CalibrateSimTruth, BeatsOpenCvCalibrateCameraOnTheHiddenTruthData) {
       ours_held_out, cv_held_out);
   std::printf("| held-out RMS, pose refitted per view, px | - | %.4f |\n",
               cv_fit.pnp_held_out_rms_px);
-  // Measured: OpenCV's focal lengths are 40 times further off (+0.20 px
-  // against -0.005 px); its principal point is as far off as ours (both carry
-  // the thin prism's shift: cx +0.08 and +0.14 px, cy -0.09 and -0.11 px), and
-  // without a rig geometry it predicts the held-out positions 21 times worse.
+  // Measured: OpenCV's focal lengths are 23-40 times further off (+0.52
+  // px against -0.013 and -0.023 px); its principal point is about as far
+  // off as ours (both carry the thin prism's shift: cx +0.04 and +0.13 px,
+  // cy -0.08 px each), and without a rig geometry it predicts the held-out
+  // positions 21 times worse.
   EXPECT_LT(ours_held_out, cv_held_out);
   EXPECT_LT(std::abs(ours_err[0]), std::abs(cv_err[0]));
   EXPECT_LT(std::abs(ours_err[1]), std::abs(cv_err[1]));

@@ -118,7 +118,7 @@ struct CalibrationOptions {
   // Parameters held at their nominal values, by name: an intrinsic ("k3",
   // "s2") or "target_scale_error" (held at 0: the sheet is exactly its layout).
   std::vector<std::string> fixed;
-  DistortionModel distortion = DistortionModel::kThinPrism;
+  DistortionModel distortion = DistortionModel::kBrownConrady5;
   double huber_px = 1.0;  // robust loss scale, px of corner error
   int threads = 2;        // Ceres threads
   int max_iterations = 100;
