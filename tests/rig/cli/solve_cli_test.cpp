@@ -112,7 +112,8 @@ TEST(RigSolve, ThinPrismCoefficientsAreAppliedBeforeSolving) {
   const RigRun r = run_rig("solve --json -", j.dump());
   ASSERT_EQ(r.exit_code, 0) << r.err;
   int solved = 0;
-  for (const auto& e : nlohmann::json::parse(r.out)["estimates"])
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  for (const auto& e : out["estimates"])
     if (!e.contains("skipped")) {
       EXPECT_NEAR(e["distance_m"].get<double>(), 0.5, 1e-6) << e.dump();
       ++solved;
