@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <opencv2/calib3d.hpp>
@@ -83,6 +84,81 @@ TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
       const Eigen::Vector2d numeric =
           (cam.distort_normalized(xy + d) - cam.distort_normalized(xy - d)) / (2 * h);
       // Central differences: truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px.
+      EXPECT_NEAR(J(0, k), numeric.x(), 1e-5);
+      EXPECT_NEAR(J(1, k), numeric.y(), 1e-5);
+    }
+  }
+}
+
+// The paper's camera with thin-prism terms ten times those of the simulated
+// `lab` lens (config/realism/lab.toml), so that a term left out or with a
+// wrong sign moves a corner pixel by far more than the tolerances below.
+vision::Camera thin_prism_camera() {
+  const auto ref = vision::Camera::paper_default();
+  vision::Distortion d = ref.distortion();
+  d.s1 = 1e-3;
+  d.s2 = -5e-4;
+  d.s3 = -8e-4;
+  d.s4 = 3e-4;
+  return vision::Camera(ref.intrinsics(), d, ref.width_px(), ref.height_px());
+}
+
+TEST(Camera, ThinPrismProjectMatchesCvProjectPointsWithTwelveCoefficients) {
+  const auto cam = thin_prism_camera();
+  ASSERT_EQ(cam.distortion_cv().cols, 12);  // OpenCV's k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4
+  const auto pts = grid_points(cam);
+  std::vector<cv::Point2d> expected;
+  cv::projectPoints(pts, cv::Vec3d(0, 0, 0), cv::Vec3d(0, 0, 0), cam.camera_matrix_cv(),
+                    cam.distortion_cv(), expected);
+  double prism_shift = 0;  // how far the thin prism moves the farthest point, px
+  const auto plain = vision::Camera::paper_default();
+  for (size_t i = 0; i < pts.size(); ++i) {
+    const Eigen::Vector2d px = cam.project({pts[i].x, pts[i].y, pts[i].z});
+    // The same polynomial in double precision: differences are rounding.
+    EXPECT_NEAR(px.x(), expected[i].x, 1e-9);
+    EXPECT_NEAR(px.y(), expected[i].y, 1e-9);
+    prism_shift =
+        std::max(prism_shift, (px - plain.project({pts[i].x, pts[i].y, pts[i].z})).norm());
+  }
+  // At the image corner r2 ~ 0.44: s1 r2 fx ~ 0.3 px, so the comparison
+  // above would see a missing term by eight orders of magnitude.
+  EXPECT_GT(prism_shift, 0.2);
+}
+
+TEST(Camera, ThinPrismUndistortMatchesCvUndistortPoints) {
+  const auto cam = thin_prism_camera();
+  std::vector<cv::Point2d> pixels;
+  for (int v = 0; v < cam.height_px(); v += 15)
+    for (int u = 0; u < cam.width_px(); u += 15)
+      pixels.emplace_back(u + 0.37, v + 0.81);
+  std::vector<cv::Point2d> expected;
+  cv::undistortPoints(
+      pixels, expected, cam.camera_matrix_cv(), cam.distortion_cv(), cv::noArray(), cv::noArray(),
+      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 1000, 1e-16));
+  const auto& k = cam.intrinsics();
+  for (size_t i = 0; i < pixels.size(); ++i) {
+    Eigen::Vector2d xy;
+    ASSERT_TRUE(cam.undistort_point({pixels[i].x, pixels[i].y}, &xy));
+    // Both invert the same model to convergence: rounding, compared on the image.
+    EXPECT_NEAR(k.fx * xy.x(), k.fx * expected[i].x, 1e-9);
+    EXPECT_NEAR(k.fy * xy.y(), k.fy * expected[i].y, 1e-9);
+    EXPECT_LE((cam.distort_normalized(xy) - Eigen::Vector2d(pixels[i].x, pixels[i].y)).norm(),
+              vision::Camera::kUndistortTolerancePx);
+  }
+}
+
+TEST(Camera, ThinPrismDistortJacobianMatchesFiniteDifferences) {
+  const auto cam = thin_prism_camera();
+  const double h = 1e-7;
+  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0.3, -0.2), Eigen::Vector2d(-0.5, 0.35)}) {
+    const Eigen::Matrix2d J = cam.distort_jacobian(xy);
+    for (int k = 0; k < 2; ++k) {
+      Eigen::Vector2d d = Eigen::Vector2d::Zero();
+      d(k) = h;
+      const Eigen::Vector2d numeric =
+          (cam.distort_normalized(xy + d) - cam.distort_normalized(xy - d)) / (2 * h);
+      // Central differences: truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px;
+      // a missing prism term would be off by 2 s1 x fx ~ 0.4 px.
       EXPECT_NEAR(J(0, k), numeric.x(), 1e-5);
       EXPECT_NEAR(J(1, k), numeric.y(), 1e-5);
     }
@@ -328,6 +404,47 @@ TEST_F(CalibrationFiles, SaveThenLoadRoundTrips) {
   EXPECT_DOUBLE_EQ(back.intrinsics().fx, ref.intrinsics().fx);
   EXPECT_DOUBLE_EQ(back.distortion().p1, ref.distortion().p1);
   EXPECT_EQ(back.height_px(), ref.height_px());
+}
+
+TEST_F(CalibrationFiles, ThinPrismRoundTripsThroughTwelveCoefficients) {
+  const auto ref = thin_prism_camera();
+  ref.save(path("prism.yaml"));
+  // What the file holds is what OpenCV reads: 12 coefficients in its order.
+  cv::FileStorage fs(path("prism.yaml"), cv::FileStorage::READ);
+  cv::Mat D;
+  fs["distortion_coefficients"] >> D;
+  ASSERT_EQ(D.total(), 12u);
+  EXPECT_EQ(D.at<double>(8), 1e-3);
+  EXPECT_EQ(D.at<double>(11), 3e-4);
+  const auto back = vision::Camera::load(path("prism.yaml"));
+  EXPECT_EQ(back.distortion().s1, ref.distortion().s1);
+  EXPECT_EQ(back.distortion().s2, ref.distortion().s2);
+  EXPECT_EQ(back.distortion().s3, ref.distortion().s3);
+  EXPECT_EQ(back.distortion().s4, ref.distortion().s4);
+  EXPECT_EQ(back.distortion().k1, ref.distortion().k1);
+  // A camera without thin prism keeps the 5-coefficient file.
+  vision::Camera::paper_default().save(path("plain.yaml"));
+  cv::FileStorage plain(path("plain.yaml"), cv::FileStorage::READ);
+  plain["distortion_coefficients"] >> D;
+  EXPECT_EQ(D.total(), 5u);
+}
+
+TEST_F(CalibrationFiles, ReadsThinPrismFromFourteenCoefficientsAndRefusesWhatItCannotHold) {
+  const auto ref = vision::Camera::paper_default();
+  cv::Mat D = cv::Mat::zeros(1, 14, CV_64F);
+  ref.distortion_cv().copyTo(D.colRange(0, 5));
+  D.at<double>(0, 10) = -5e-5;  // s3
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), D);
+  EXPECT_EQ(vision::Camera::load(path("c.yml")).distortion().s3, -5e-5);
+  D.at<double>(0, 13) = 1e-3;  // tau_y
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), D);
+  expect_error(path("c.yml"), "non-zero sensor tilt tau");
+  D = cv::Mat::zeros(1, 12, CV_64F);
+  D.at<double>(0, 5) = 0.01;  // k4
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), D);
+  expect_error(path("c.yml"), "non-zero rational term k4");
+  write_opencv_calibration(path("c.yml"), ref.camera_matrix_cv(), cv::Mat::zeros(1, 6, CV_64F));
+  expect_error(path("c.yml"), "must be a vector of 4, 5, 8, 12 or 14 values");
 }
 
 }  // namespace

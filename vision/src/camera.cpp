@@ -1,6 +1,7 @@
 #include "vision/camera.hpp"
 
 #include <Eigen/LU>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -215,6 +216,38 @@ Node read_xml(const std::string& path, const std::string& text) {
   return from_file_node(fs.root());
 }
 
+// The distortion coefficients in OpenCV's order (camera.hpp): 4, 5, 8, 12
+// or 14 values, the rational k4..k6 and the sensor tilt tau zero.
+Distortion distortion_of(const std::string& path, const std::vector<double>& d, int rows,
+                         int cols) {
+  const std::string key = "distortion_coefficients";
+  const std::size_t n = d.size();
+  if ((rows != 1 && cols != 1) || (n != 4 && n != 5 && n != 8 && n != 12 && n != 14))
+    fail(path, key,
+         "must be a vector of 4, 5, 8, 12 or 14 values (OpenCV's order k1 k2 p1 p2 k3 k4 k5 k6 "
+         "s1 s2 s3 s4 tau_x tau_y), got " +
+             std::to_string(n) + " as " + std::to_string(rows) + "x" + std::to_string(cols));
+  for (std::size_t i = 5; i < std::min<std::size_t>(n, 8); ++i)
+    if (d[i] != 0)
+      fail(path, key,
+           "has a non-zero rational term k" + std::to_string(i - 1) +
+               " (OpenCV's rational model), which this camera model does not represent; "
+               "expected k4 = k5 = k6 = 0 (Brown-Conrady with thin prism)");
+  for (std::size_t i = 12; i < n; ++i)
+    if (d[i] != 0)
+      fail(path, key,
+           "has a non-zero sensor tilt tau (coefficients 13-14), which this camera model does "
+           "not represent; expected 0");
+  Distortion out{d[0], d[1], d[2], d[3], n > 4 ? d[4] : 0.0};
+  if (n >= 12) {
+    out.s1 = d[8];
+    out.s2 = d[9];
+    out.s3 = d[10];
+    out.s4 = d[11];
+  }
+  return out;
+}
+
 }  // namespace
 
 Camera::Camera(const Intrinsics& intrinsics, const Distortion& distortion, int width_px,
@@ -224,7 +257,8 @@ Camera::Camera(const Intrinsics& intrinsics, const Distortion& distortion, int w
       intrinsics.fx <= 0 || intrinsics.fy <= 0)
     throw std::invalid_argument(
         "camera intrinsics: fx and fy must be finite and > 0, cx and cy finite");
-  if (!finite_all({distortion.k1, distortion.k2, distortion.p1, distortion.p2, distortion.k3}))
+  if (!finite_all({distortion.k1, distortion.k2, distortion.p1, distortion.p2, distortion.k3,
+                   distortion.s1, distortion.s2, distortion.s3, distortion.s4}))
     throw std::invalid_argument("camera distortion: every coefficient must be finite");
   if (width_px <= 0 || height_px <= 0)
     throw std::invalid_argument("camera image size: width and height must be > 0, got " +
@@ -282,24 +316,14 @@ Camera Camera::load(const std::string& path) {
     fail(path, "camera_matrix", "must have the form [fx 0 cx; 0 fy cy; 0 0 1] (no skew)");
   if (k[0] <= 0 || k[4] <= 0) fail(path, "camera_matrix", "must have fx > 0 and fy > 0");
 
-  if (const Node* model = root.find("distortion_model")) {
-    if (model->kind != Node::Kind::kScalar)
-      fail(path, "distortion_model", "must be a name (expected plumb_bob)");
-    const std::string& name = model->text;
-    if (name != "plumb_bob" && name != "rational_polynomial")
-      fail(path, "distortion_model", "'" + name + "' is not supported (expected plumb_bob)");
-  }
+  const Node* model = root.find("distortion_model");
+  if (model && model->kind != Node::Kind::kScalar)
+    fail(path, "distortion_model", "must be a name (expected plumb_bob or rational_polynomial)");
+  if (model && model->text != "plumb_bob" && model->text != "rational_polynomial")
+    fail(path, "distortion_model",
+         "'" + model->text + "' is not supported (expected plumb_bob or rational_polynomial)");
   const auto d = read_matrix(root, path, "distortion_coefficients", &rows, &cols);
-  if ((rows != 1 && cols != 1) || d.size() < 4)
-    fail(path, "distortion_coefficients",
-         "must be a vector of 4, 5 or more values (k1 k2 p1 p2 [k3 ...])");
-  for (size_t i = 5; i < d.size(); ++i)
-    if (d[i] != 0)
-      fail(path, "distortion_coefficients",
-           "has a non-zero term past k3 (rational or thin-prism model), which this camera model "
-           "does not represent");
-  const Distortion dist{d[0], d[1], d[2], d[3], d.size() > 4 ? d[4] : 0.0};
-  return Camera({k[0], k[4], k[2], k[5]}, dist, width, height);
+  return Camera({k[0], k[4], k[2], k[5]}, distortion_of(path, d, rows, cols), width, height);
 }
 
 void Camera::save(const std::string& path) const {
@@ -311,7 +335,7 @@ void Camera::save(const std::string& path) const {
 
 bool Camera::has_distortion() const {
   const auto& d = distortion_;
-  return d.k1 != 0 || d.k2 != 0 || d.p1 != 0 || d.p2 != 0 || d.k3 != 0;
+  return d.k1 != 0 || d.k2 != 0 || d.p1 != 0 || d.p2 != 0 || d.k3 != 0 || d.has_thin_prism();
 }
 
 std::optional<std::string> Camera::image_size_mismatch(const cv::Size& image_size,
@@ -338,7 +362,8 @@ cv::Mat Camera::camera_matrix_cv() const {
 
 cv::Mat Camera::distortion_cv() const {
   const auto& d = distortion_;
-  return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
+  if (!d.has_thin_prism()) return (cv::Mat_<double>(1, 5) << d.k1, d.k2, d.p1, d.p2, d.k3);
+  return (cv::Mat_<double>(1, 12) << d.k1, d.k2, d.p1, d.p2, d.k3, 0, 0, 0, d.s1, d.s2, d.s3, d.s4);
 }
 
 Eigen::Vector2d Camera::project(const Eigen::Vector3d& p_cam) const {
@@ -350,8 +375,10 @@ Eigen::Vector2d Camera::distort_normalized(const Eigen::Vector2d& xy) const {
   const double x = xy.x(), y = xy.y();
   const double r2 = x * x + y * y;
   const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-  const double xd = x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x);
-  const double yd = y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y;
+  const double xd =
+      x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x) + r2 * (d.s1 + d.s2 * r2);
+  const double yd =
+      y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y + r2 * (d.s3 + d.s4 * r2);
   return {intrinsics_.fx * xd + intrinsics_.cx, intrinsics_.fy * yd + intrinsics_.cy};
 }
 
@@ -367,6 +394,12 @@ Eigen::Matrix2d Camera::distort_jacobian(const Eigen::Vector2d& xy) const {
   j(0, 1) = x * dradial * 2 * y + 2 * d.p1 * x + d.p2 * 2 * y;
   j(1, 0) = y * dradial * 2 * x + d.p1 * 2 * x + 2 * d.p2 * y;
   j(1, 1) = radial + y * dradial * 2 * y + d.p1 * 6 * y + 2 * d.p2 * x;
+  // Thin prism: d(s r2 + s' r2^2)/dx = (s + 2 s' r2) 2x, likewise for y.
+  const double gx = d.s1 + 2 * d.s2 * r2, gy = d.s3 + 2 * d.s4 * r2;
+  j(0, 0) += gx * 2 * x;
+  j(0, 1) += gx * 2 * y;
+  j(1, 0) += gy * 2 * x;
+  j(1, 1) += gy * 2 * y;
   j.row(0) *= intrinsics_.fx;
   j.row(1) *= intrinsics_.fy;
   return j;

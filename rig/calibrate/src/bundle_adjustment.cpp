@@ -21,6 +21,10 @@ const std::array<const char*, kParameterCount> kParameterNames = {"fx",
                                                                   "p1",
                                                                   "p2",
                                                                   "k3",
+                                                                  "s1",
+                                                                  "s2",
+                                                                  "s3",
+                                                                  "s4",
                                                                   "camera_misalignment_x_deg",
                                                                   "camera_misalignment_y_deg",
                                                                   "camera_misalignment_z_deg",
@@ -32,8 +36,8 @@ const std::array<const char*, kParameterCount> kParameterNames = {"fx",
                                                                   "camera_to_target_z_mm",
                                                                   "target_scale_error"};
 const std::array<const char*, kParameterCount> kParameterUnits = {
-    "px",  "px",  "px",  "px",  "",    "",   "",   "",   "", "deg",
-    "deg", "deg", "deg", "deg", "deg", "mm", "mm", "mm", ""};
+    "px", "px",  "px",  "px",  "",    "",    "",    "",   "",   "",   "", "",
+    "",   "deg", "deg", "deg", "deg", "deg", "deg", "mm", "mm", "mm", ""};
 
 int parameter_index(const std::string& name) {
   for (int i = 0; i < kParameterCount; ++i)
@@ -63,7 +67,8 @@ Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry
                          double target_scale_error) {
   const vision::Intrinsics& k = camera.intrinsics();
   const vision::Distortion& dist = camera.distortion();
-  Parameters p{k.fx, k.fy, k.cx, k.cy, dist.k1, dist.k2, dist.p1, dist.p2, dist.k3};
+  Parameters p{k.fx,    k.fy,    k.cx,    k.cy,    dist.k1, dist.k2, dist.p1,
+               dist.p2, dist.k3, dist.s1, dist.s2, dist.s3, dist.s4};
   const Eigen::Matrix3d N = vision::RigGeometry::R_bench_nominal();
   const Eigen::Vector3d m = rotation_vector(N.transpose() * geometry.T_carriage_cam.R);
   const Eigen::Vector3d tilt = rotation_vector(N.transpose() * geometry.T_bench_target.R);
@@ -78,8 +83,12 @@ Parameters parameters_of(const vision::Camera& camera, const vision::RigGeometry
 }
 
 vision::Camera camera_of(const Parameters& p, const vision::Camera& like) {
-  return vision::Camera({p[0], p[1], p[2], p[3]}, {p[4], p[5], p[6], p[7], p[8]}, like.width_px(),
-                        like.height_px());
+  vision::Distortion d{p[4], p[5], p[6], p[7], p[8]};
+  d.s1 = p[kThinPrism];
+  d.s2 = p[kThinPrism + 1];
+  d.s3 = p[kThinPrism + 2];
+  d.s4 = p[kThinPrism + 3];
+  return vision::Camera({p[0], p[1], p[2], p[3]}, d, like.width_px(), like.height_px());
 }
 
 vision::RigGeometry geometry_of(const Parameters& p, const vision::RigGeometry& nominal) {
@@ -120,16 +129,23 @@ double output_scale(int i) {
   return 1.0;
 }
 
+// The parameters held: those named, and s1..s4 under the 5-coefficient model.
 std::vector<int> fixed_indices(const CalibrationOptions& options) {
-  std::vector<int> fixed;
+  std::vector<bool> held(kParameterCount, false);
   for (const std::string& name : options.fixed) {
     const int i = parameter_index(name);
     if (i < 0 || (i >= kIntrinsicCount && i != detail::kScale))
       throw CalibrationInputError("fixed parameter \"" + name +
-                                  "\": expected one of fx fy cx cy k1 k2 p1 p2 k3 "
+                                  "\": expected one of fx fy cx cy k1 k2 p1 p2 k3 s1 s2 s3 s4 "
                                   "target_scale_error");
-    fixed.push_back(i);
+    held[static_cast<std::size_t>(i)] = true;
   }
+  if (options.distortion == DistortionModel::kBrownConrady5)
+    for (int i = detail::kThinPrism; i < detail::kThinPrism + 4; ++i)
+      held[static_cast<std::size_t>(i)] = true;
+  std::vector<int> fixed;
+  for (int i = 0; i < kParameterCount; ++i)
+    if (held[static_cast<std::size_t>(i)]) fixed.push_back(i);
   return fixed;
 }
 

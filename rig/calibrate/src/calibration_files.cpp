@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "model.hpp"
 #include "rig/calibrate/calibration.hpp"
 
 namespace rig::calibrate {
@@ -28,17 +29,26 @@ std::string triple(double a, double b, double c) {
   return "[" + number(a) + ", " + number(b) + ", " + number(c) + "]";
 }
 
-// The ROS camera_info YAML that vision::Camera::load reads.
+// The ROS camera_info YAML that vision::Camera::load reads: plumb_bob (5
+// coefficients), or with a thin prism OpenCV's 12 (k4..k6 = 0) under
+// rational_polynomial, the ROS model whose coefficients go to OpenCV as they
+// are (ROS defines it with 8; a reader that takes only 8 drops s1..s4).
 std::string ros_camera_info(const vision::Camera& camera) {
   const vision::Intrinsics& k = camera.intrinsics();
-  const vision::Distortion& d = camera.distortion();
+  const cv::Mat d = camera.distortion_cv();
   std::ostringstream s;
   s << "image_width: " << camera.width_px() << "\nimage_height: " << camera.height_px()
     << "\ncamera_matrix: {rows: 3, cols: 3, data: [" << number(k.fx) << ", 0, " << number(k.cx)
-    << ", 0, " << number(k.fy) << ", " << number(k.cy) << ", 0, 0, 1]}\n"
-    << "distortion_model: plumb_bob\n"
-    << "distortion_coefficients: {rows: 1, cols: 5, data: [" << number(d.k1) << ", " << number(d.k2)
-    << ", " << number(d.p1) << ", " << number(d.p2) << ", " << number(d.k3) << "]}\n";
+    << ", 0, " << number(k.fy) << ", " << number(k.cy) << ", 0, 0, 1]}\n";
+  if (camera.distortion().has_thin_prism())
+    s << "# k1 k2 p1 p2 k3 k4 k5 k6 s1 s2 s3 s4 (OpenCV's order; s1..s4 thin prism)\n"
+      << "distortion_model: rational_polynomial\n";
+  else
+    s << "distortion_model: plumb_bob\n";
+  s << "distortion_coefficients: {rows: 1, cols: " << d.cols << ", data: [";
+  for (int i = 0; i < d.cols; ++i)
+    s << (i ? ", " : "") << number(d.at<double>(0, i));
+  s << "]}\n";
   return s.str();
 }
 
@@ -47,16 +57,19 @@ std::string ros_camera_info(const vision::Camera& camera) {
 std::string rig_file(const CalibrationProblem& problem, const CalibrationResult& r) {
   const auto v = [&](int i) { return r.parameters[static_cast<std::size_t>(i)].value; };
   const Eigen::Vector3d offset_mm = problem.nominal_geometry.T_carriage_cam.t * 1000.0;
-  const Eigen::Vector3d origin_mm = offset_mm + Eigen::Vector3d(v(15), v(16), v(17));
+  using detail::kMisalignment, detail::kOffset, detail::kTilt;
+  const Eigen::Vector3d origin_mm =
+      offset_mm + Eigen::Vector3d(v(kOffset), v(kOffset + 1), v(kOffset + 2));
   std::ostringstream s;
   s << "# Calibrated by rig calibrate from "
     << std::filesystem::path(problem.source).filename().string()
     << ".\n# With translation-only motion only origin - offset is observable: the camera\n"
     << "# offset is the nominal one, the target origin absorbs the difference.\n"
     << "[camera_mount]\noffset_mm = " << triple(offset_mm.x(), offset_mm.y(), offset_mm.z())
-    << "\nmisalignment_deg = " << triple(v(9), v(10), v(11))
+    << "\nmisalignment_deg = "
+    << triple(v(kMisalignment), v(kMisalignment + 1), v(kMisalignment + 2))
     << "\n\n[target]\norigin_mm = " << triple(origin_mm.x(), origin_mm.y(), origin_mm.z())
-    << "\ntilt_deg = " << triple(v(12), v(13), v(14)) << "\n";
+    << "\ntilt_deg = " << triple(v(kTilt), v(kTilt + 1), v(kTilt + 2)) << "\n";
   return s.str();
 }
 

@@ -10,10 +10,11 @@
 
 namespace rig::calibrate::detail {
 
-// Parameter block layout: intrinsics (9), camera misalignment (3, radians),
-// target tilt (3, radians), camera-to-target offset at bench zero d (3, m),
-// the sheet's print scale error s (1: the sheet is (1 + s) times its layout).
-constexpr int kMisalignment = 9, kTilt = 12, kOffset = 15, kScale = 18;
+// Parameter block layout: intrinsics (13: fx fy cx cy k1 k2 p1 p2 k3 s1 s2 s3
+// s4), camera misalignment (3, radians), target tilt (3, radians),
+// camera-to-target offset at bench zero d (3, m), the sheet's print scale
+// error s (1: the sheet is (1 + s) times its layout).
+constexpr int kThinPrism = 9, kMisalignment = 13, kTilt = 16, kOffset = 19, kScale = 22;
 
 // Projects target point P (m, as laid out; printed at (1 + s) P) with the
 // carriage at (x_m, y_m) to distorted pixels. R_nominal * v = (v2, -v0, -v1); R_nominal^T * w =
@@ -34,8 +35,11 @@ void project(const T* p, const double P[3], double x_m, double y_m, T uv[2]) {
   const T x = c[0] / c[2], y = c[1] / c[2];
   const T r2 = x * x + y * y;
   const T radial = T(1) + p[4] * r2 + p[5] * r2 * r2 + p[8] * r2 * r2 * r2;
-  const T xd = x * radial + T(2) * p[6] * x * y + p[7] * (r2 + T(2) * x * x);
-  const T yd = y * radial + p[6] * (r2 + T(2) * y * y) + T(2) * p[7] * x * y;
+  const T* s = p + kThinPrism;
+  const T xd =
+      x * radial + T(2) * p[6] * x * y + p[7] * (r2 + T(2) * x * x) + r2 * (s[0] + s[1] * r2);
+  const T yd =
+      y * radial + p[6] * (r2 + T(2) * y * y) + T(2) * p[7] * x * y + r2 * (s[2] + s[3] * r2);
   uv[0] = p[0] * xd + p[2];
   uv[1] = p[1] * yd + p[3];
 }

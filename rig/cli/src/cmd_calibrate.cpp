@@ -6,7 +6,7 @@
 //
 // Exit codes: 0 written; 1 a failure while solving or writing; 2 bad input
 // (missing file, not a rig database, no such run, no detections, an
-// unobservable plan, an unknown --fix name).
+// unobservable plan, an unknown --fix name or --distortion model).
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -23,6 +23,7 @@ struct CalibrateArgs {
   std::string database;
   std::string out_dir;
   std::vector<std::string> fixed;
+  std::string distortion = "5";
   double huber_px = 1.0;
   int threads = 2;
 };
@@ -41,6 +42,8 @@ int run_calibrate(const CalibrateArgs& a) {
   const calibrate::CalibrationProblem problem = calibrate::read_run(path, run);
   calibrate::CalibrationOptions options;
   options.fixed = a.fixed;
+  options.distortion = a.distortion == "5" ? calibrate::DistortionModel::kBrownConrady5
+                                           : calibrate::DistortionModel::kThinPrism;
   options.huber_px = a.huber_px;
   options.threads = a.threads;
   const calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
@@ -70,10 +73,17 @@ void add_calibrate_command(CLI::App& app, ExitStatus& status) {
   cmd->add_option("DB", args->database, "Run database written by rig sweep, DB or DB:RUN")
       ->required();
   cmd->add_option("--out", args->out_dir, "Output directory (created if missing)")->required();
-  cmd->add_option("--fix", args->fixed,
-                  "Hold a parameter at its nominal value: fx fy cx cy k1 k2 p1 p2 k3, or "
-                  "target_scale_error (the sheet printed exactly at its layout's size) "
-                  "(repeatable)");
+  cmd->add_option(
+      "--fix", args->fixed,
+      "Hold a parameter at its nominal value: fx fy cx cy k1 k2 p1 p2 k3 s1 s2 s3 s4, or "
+      "target_scale_error (the sheet printed exactly at its layout's size) "
+      "(repeatable)");
+  cmd->add_option("--distortion", args->distortion,
+                  "Lens model to fit: 5 (Brown-Conrady k1 k2 p1 p2 k3; s1..s4 held at the "
+                  "nominal calibration's values) or thin_prism (also s1..s4, OpenCV's "
+                  "12-coefficient model with k4..k6 = 0)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"5", "thin_prism"}));
   cmd->add_option("--huber-px", args->huber_px, "Robust loss scale, px")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);

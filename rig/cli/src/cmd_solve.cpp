@@ -105,7 +105,8 @@ void add_solve_command(CLI::App& app, ExitStatus& status) {
   auto json = std::make_shared<bool>(false);
   cmd->add_option("problem", *source,
                   "JSON problem file, or - for standard input: {\"camera\": {fx, fy, cx, cy, "
-                  "dist: [k1,k2,p1,p2,k3], width, height}} or {\"camera_file\": PATH}, "
+                  "dist: [k1,k2,p1,p2,k3] or OpenCV's 12 with s1..s4, width, height}} or "
+                  "{\"camera_file\": PATH}, "
                   "\"object_points\": [[x,y,z],...] (metres, target frame), \"image_points\": "
                   "[[u,v],...] (pixels, distorted)")
       ->required();

@@ -51,12 +51,22 @@ vision::Camera read_camera(const nlohmann::json& j) {
   vision::Distortion d;
   if (j.contains("dist")) {
     const auto& dist = j["dist"];
-    if (!dist.is_array() || dist.size() < 4 || dist.size() > 5)
-      throw ProblemError("'camera.dist' must be [k1, k2, p1, p2] or [k1, k2, p1, p2, k3], got " +
-                         config::excerpt_json(dist));
-    double* fields[] = {&d.k1, &d.k2, &d.p1, &d.p2, &d.k3};
-    for (size_t k = 0; k < dist.size(); ++k)
+    if (!dist.is_array() || (dist.size() != 4 && dist.size() != 5 && dist.size() != 12))
+      throw ProblemError(
+          "'camera.dist' must be [k1, k2, p1, p2], [k1, k2, p1, p2, k3] or OpenCV's 12 "
+          "[k1, k2, p1, p2, k3, k4, k5, k6, s1, s2, s3, s4] with k4 = k5 = k6 = 0, got " +
+          config::excerpt_json(dist));
+    double rational = 0;  // k4..k6: OpenCV's rational model, which vision::Camera does not hold
+    double* fields[] = {&d.k1,     &d.k2,     &d.p1, &d.p2, &d.k3, &rational,
+                        &rational, &rational, &d.s1, &d.s2, &d.s3, &d.s4};
+    for (size_t k = 0; k < dist.size(); ++k) {
       *fields[k] = finite_number(dist[k], "camera.dist[" + std::to_string(k) + "]");
+      if (rational != 0)
+        throw ProblemError("'camera.dist[" + std::to_string(k) +
+                           "]' is a rational term k4..k6 of OpenCV's rational model, which is "
+                           "not supported; expected 0, got " +
+                           config::excerpt_json(dist[k]));
+    }
   }
   const auto size = [&](const char* k) {
     const auto& v = need(k);

@@ -32,11 +32,12 @@ const char* to_string(FailureKind kind) {
 
 std::string camera_json(const vision::Camera& camera) {
   const vision::Intrinsics& k = camera.intrinsics();
-  const vision::Distortion& d = camera.distortion();
+  // OpenCV's order, as cv::solvePnP takes it: 5 values, 12 with a thin prism.
+  const cv::Mat d = camera.distortion_cv();
   return nlohmann::json{{"width_px", camera.width_px()},
                         {"height_px", camera.height_px()},
                         {"K", {{k.fx, 0.0, k.cx}, {0.0, k.fy, k.cy}, {0.0, 0.0, 1.0}}},
-                        {"distortion", {d.k1, d.k2, d.p1, d.p2, d.k3}}}
+                        {"distortion", std::vector<double>(d.begin<double>(), d.end<double>())}}
       .dump();
 }
 

@@ -33,6 +33,7 @@ void read_camera_truth(config::Table t, RealismProfile* p) {
       p->scene.thin_prism[k] = v[k];
     }
   }
+  p->scene.radial_k4 = t.number_or("radial_k4", 0, within(-0.5, 0.5));
   t.reject_unknown();
 }
 
@@ -328,7 +329,8 @@ std::string truth_json(const SimTruth& truth, const RealismProfile& profile) {
                               {"p1", d.p1},
                               {"p2", d.p2},
                               {"k3", d.k3},
-                              {"thin_prism", truth.thin_prism}}},
+                              {"thin_prism", truth.thin_prism},
+                              {"radial_k4", profile.scene.radial_k4}}},
                             {"T_carriage_cam", pose_json(truth.geometry.T_carriage_cam)},
                             {"T_bench_target", pose_json(truth.geometry.T_bench_target)},
                             {"print_scale_error", truth.print_scale_error}};

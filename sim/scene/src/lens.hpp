@@ -1,13 +1,14 @@
-// The renderer's true lens: vision::Camera's Brown-Conrady model plus the
-// thin-prism terms of SceneOptions::thin_prism (private to sim_scene). The
-// pose solvers' model (vision::Camera) stays the 5-parameter one, so a lens
-// with prism terms is never fitted exactly by a calibration, as with a real
-// lens.
+// The renderer's true lens: vision::Camera's model plus the thin-prism terms
+// of SceneOptions::thin_prism and the radial r^8 term of
+// SceneOptions::radial_k4 (private to sim_scene). vision::Camera has no r^8
+// term, so a lens with one is never fitted exactly by a calibration, as with
+// a real lens.
 //
 // Thin prism (Weng, Cohen & Herniou, "Camera calibration with distortion
-// models and accuracy evaluation", IEEE PAMI 14(10), 1992; OpenCV's s1..s4):
-//   xd += s1 r2 + s2 r2^2,  yd += s3 r2 + s4 r2^2,  r2 = x^2 + y^2,
-// added to the Brown-Conrady (xd, yd) before the intrinsics.
+// models and accuracy evaluation", IEEE PAMI 14(10), 1992; OpenCV's s1..s4)
+// and radial r^8 (Brown 1971, the fourth term of the radial series):
+//   xd += s1 r2 + s2 r2^2 + x k4 r2^4,  yd += s3 r2 + s4 r2^2 + y k4 r2^4,
+// r2 = x^2 + y^2, added to the camera's (xd, yd) before the intrinsics.
 #pragma once
 
 #include <Eigen/Core>
@@ -19,10 +20,13 @@ namespace sim::scene::detail {
 
 class Lens {
  public:
-  Lens(const vision::Camera& camera, const std::array<double, 4>& thin_prism)
-      : camera_(camera), s_(thin_prism) {}
+  Lens(const vision::Camera& camera, const std::array<double, 4>& thin_prism, double radial_k4 = 0)
+      : camera_(camera), s_(thin_prism), k4_(radial_k4) {}
 
-  bool has_prism() const { return s_[0] != 0 || s_[1] != 0 || s_[2] != 0 || s_[3] != 0; }
+  // Whether the lens has a term beyond the camera's model.
+  bool has_prism() const {
+    return s_[0] != 0 || s_[1] != 0 || s_[2] != 0 || s_[3] != 0 || k4_ != 0;
+  }
 
   // Undistorted normalized point -> distorted pixels (OpenCV convention).
   Eigen::Vector2d distort_normalized(const Eigen::Vector2d& xy) const {
@@ -30,8 +34,9 @@ class Lens {
     if (!has_prism()) return px;
     const double r2 = xy.squaredNorm();
     const auto& k = camera_.intrinsics();
-    px.x() += k.fx * (s_[0] * r2 + s_[1] * r2 * r2);
-    px.y() += k.fy * (s_[2] * r2 + s_[3] * r2 * r2);
+    const double r8 = r2 * r2 * r2 * r2;
+    px.x() += k.fx * (s_[0] * r2 + s_[1] * r2 * r2 + xy.x() * k4_ * r8);
+    px.y() += k.fy * (s_[2] * r2 + s_[3] * r2 * r2 + xy.y() * k4_ * r8);
     return px;
   }
 
@@ -47,6 +52,12 @@ class Lens {
     J(0, 1) += k.fx * gx * 2 * xy.y();
     J(1, 0) += k.fy * gy * 2 * xy.x();
     J(1, 1) += k.fy * gy * 2 * xy.y();
+    // d(x k4 r2^4)/dx = k4 (r2^4 + 8 x^2 r2^3), d/dy = 8 k4 x y r2^3; likewise for y.
+    const double r6 = r2 * r2 * r2, x = xy.x(), y = xy.y();
+    J(0, 0) += k.fx * k4_ * (r6 * r2 + 8 * x * x * r6);
+    J(0, 1) += k.fx * k4_ * 8 * x * y * r6;
+    J(1, 0) += k.fy * k4_ * 8 * x * y * r6;
+    J(1, 1) += k.fy * k4_ * (r6 * r2 + 8 * y * y * r6);
     return J;
   }
 
@@ -61,6 +72,7 @@ class Lens {
  private:
   vision::Camera camera_;
   std::array<double, 4> s_;
+  double k4_;
 };
 
 }  // namespace sim::scene::detail

@@ -55,6 +55,7 @@ void validate(const SceneOptions& o) {
         "occluder_max_width_px", o.occluder_max_width_px, ">= occluder_min_width_px > 0");
   for (double s : o.thin_prism)
     check(std::abs(s) <= 0.05, "thin_prism", s, "each of s1..s4 within -0.05 .. 0.05");
+  check(std::abs(o.radial_k4) <= 0.5, "radial_k4", o.radial_k4, "within -0.5 .. 0.5");
   check(o.f_number >= 0 && o.f_number <= 64, "f_number", o.f_number, "0 (no defocus) .. 64");
   check(o.focus_distance_m > 0, "focus_distance_m", o.focus_distance_m, "> 0");
   check(o.pixel_pitch_m > 0 && o.pixel_pitch_m < 1e-3, "pixel_pitch_m", o.pixel_pitch_m,
@@ -105,7 +106,7 @@ struct SceneRenderer::Impl {
       : camera(c),
         target(t),
         options(o),
-        lens(c, o.thin_prism),
+        lens(c, o.thin_prism, o.radial_k4),
         rays(detail::build_ray_table(lens, o.vignetting)),
         front(t, family, true),
         back(t, family, false),

@@ -2,10 +2,12 @@
 // loaders rig uses, and bad input exits 2 naming the input.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "rig/calibrate/calibration.hpp"
 #include "rig_command.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_calibration.hpp"
@@ -46,12 +48,48 @@ TEST(CalibrateCli, WritesFilesThatRigReads) {
   EXPECT_EQ(g.T_carriage_cam.t, Eigen::Vector3d::Zero());
   std::ifstream in(out + "/calibration.json");
   const nlohmann::json j = nlohmann::json::parse(in);
-  EXPECT_EQ(j["parameters"].size(), 19u);
-  EXPECT_EQ(j["correlation"]["matrix"].size(), 19u);
+  const auto n = static_cast<std::size_t>(rig::calibrate::kParameterCount);
+  EXPECT_EQ(j["parameters"].size(), n);
+  EXPECT_EQ(j["correlation"]["matrix"].size(), n);
   EXPECT_GT(j["held_out"]["held_out_positions"].get<int>(), 100);
   // Held out, the prediction is at the noise floor: 0.1 px per coordinate is
   // 0.141 px of |r|; +10 % for the parameter error.
   EXPECT_LT(j["held_out"]["held_out_rms_px"].get<double>(), 0.156);
+}
+
+// --distortion thin_prism: the fitted s1..s4 reach both camera files (12
+// coefficients in OpenCV's order) exactly as calibration.json states them
+// (written with 12 significant digits: a relative 1e-11).
+TEST(CalibrateCli, ThinPrismReachesBothCameraFiles) {
+  const db_test::ScratchDir dir;
+  const std::string db =
+      write_run(dir, rig_test::read_csv_plan(rig_test::calibration_plan_path(RIG_SOURCE_DIR)));
+  const std::string out = dir.file("out");
+  const rig_test::RigRun r =
+      rig_test::run_rig("calibrate " + db + ":1 --distortion thin_prism --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(out + "/calibration.json");
+  const nlohmann::json j = nlohmann::json::parse(in);
+  std::array<double, 4> s{};
+  for (const nlohmann::json& p : j["parameters"])
+    for (int k = 0; k < 4; ++k)
+      if (p["name"] == "s" + std::to_string(k + 1)) {
+        EXPECT_FALSE(p["fixed"].get<bool>());
+        s[static_cast<std::size_t>(k)] = p["value"].get<double>();
+      }
+  ASSERT_NE(s[0], 0.0);  // a fit with noise never lands on exactly 0
+  for (const char* file : {"/camera.yaml", "/camera_info.yaml"}) {
+    const vision::Camera cam = vision::Camera::load(out + file);
+    EXPECT_EQ(cam.distortion_cv().cols, 12) << file;
+    const vision::Distortion& d = cam.distortion();
+    const std::array<double, 4> got{d.s1, d.s2, d.s3, d.s4};
+    for (std::size_t k = 0; k < 4; ++k)
+      EXPECT_NEAR(got[k], s[k], 1e-11 * std::abs(s[k]) + 1e-300) << file << " s" << k + 1;
+  }
+  const rig_test::RigRun bad =
+      rig_test::run_rig("calibrate " + db + " --distortion 8 --out " + out);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--distortion"), std::string::npos) << bad.err;
 }
 
 TEST(CalibrateCli, BadInputExitsTwoNamingIt) {

@@ -1,14 +1,14 @@
 // rig::calibrate against the simulated rig's hidden truth: for each of ten
 // truth seeds of the `lab` realism profile (camera, lens with thin-prism
-// terms, mount, target pose and print scale drawn by sim::camera), the
+// and radial r^8 terms, mount, target pose and print scale drawn by
+// sim::camera), the
 // shipped calibration plan and A3 target rendered by the real renderer and
 // detected by the real detector with the nominal calibration
 // (tests/rig/calibrate/sim_truth_calibration.hpp), calibrated, compared with
-// the truth the simulator rendered with. Every other plan position (111 of
-// 221, one frame each, ~8,500 corners per seed) keeps the ten seeds at about
-// 25 s of CPU; on the whole plan the figures are the same to within the
-// spread quoted below (measured: worst fx 0.0015 %, cx 0.155 px, pitch
-// 0.0083 deg, yaw 0.0123 deg, distance 7.0 um).
+// the truth the simulator rendered with, under both lens models of rig
+// calibrate (--distortion 5 and thin_prism). Every other plan position (111
+// of 221, one frame each, ~8,500 corners per seed) keeps the ten seeds and
+// both models at about 35 s of CPU.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -25,6 +25,7 @@ namespace {
 
 using rig::calibrate::CalibrationOptions;
 using rig::calibrate::CalibrationResult;
+using rig::calibrate::DistortionModel;
 
 constexpr int kSeeds = 10;
 
@@ -33,24 +34,35 @@ constexpr int kSeeds = 10;
 // camera-to-target at bench zero, m. Stated: the calibration's own sd.
 struct SeedErrors {
   std::map<std::string, double> error, stated_sd;
+  double sigma_px = 0;  // the fit's residual scale
 };
 
-SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) {
+// One seed's calibration sweep: every other plan position, one frame.
+rig_test::SimTruthSweep render_seed(std::uint64_t seed, std::optional<double> bow_sag_mm,
+                                    std::optional<double> radial_k4 = std::nullopt) {
   rig_test::SimTruthSweepSpec spec;
   spec.source_dir = RIG_SOURCE_DIR;
   spec.truth_seed = seed;
   spec.bow_sag_mm = bow_sag_mm;
+  spec.radial_k4 = radial_k4;
   spec.position_stride = 2;
+  return rig_test::render_calibration_sweep(spec);
+}
+
+SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel model) {
+  CalibrationOptions options;
+  options.distortion = model;
   const auto start = std::chrono::steady_clock::now();
-  const rig_test::SimTruthSweep sweep = rig_test::render_calibration_sweep(spec);
-  const auto rendered = std::chrono::steady_clock::now();
-  const CalibrationResult r = rig::calibrate::calibrate(sweep.problem, CalibrationOptions{});
+  const CalibrationResult r = rig::calibrate::calibrate(sweep.problem, options);
   const auto done = std::chrono::steady_clock::now();
   const vision::Intrinsics& k = r.camera.intrinsics();
   const vision::Intrinsics& t = sweep.truth.camera.intrinsics();
   const Eigen::Vector3d rotation =
       rig_test::camera_rotation_error_deg(r.geometry, sweep.truth.geometry);
+  const vision::Distortion& d = r.camera.distortion();
+  const std::array<double, 4>& s = sweep.truth.thin_prism;
   SeedErrors e;
+  e.sigma_px = r.sigma_px;
   e.error = {{"fx", k.fx / t.fx - 1},
              {"fy", k.fy / t.fy - 1},
              {"cx", k.cx - t.cx},
@@ -60,20 +72,46 @@ SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) 
              {"roll", rotation.z()},
              {"distance", r.geometry.distance_m(0, 0) - sweep.truth.geometry.distance_m(0, 0)},
              {"scale", r.target_scale_error - sweep.truth.print_scale_error}};
-  const auto sd = [&](int i) { return r.parameters[static_cast<std::size_t>(i)].sd; };
-  e.stated_sd = {{"fx", sd(0) / k.fx}, {"fy", sd(1) / k.fy}, {"cx", sd(2)},    {"cy", sd(3)},
-                 {"pitch", sd(9)},     {"yaw", sd(10)},      {"roll", sd(11)}, {"scale", sd(18)}};
+  const auto sd = [&](const char* name) {
+    return r.parameters[static_cast<std::size_t>(rig::calibrate::parameter_index(name))].sd;
+  };
+  e.stated_sd = {{"fx", sd("fx") / k.fx},
+                 {"fy", sd("fy") / k.fy},
+                 {"cx", sd("cx")},
+                 {"cy", sd("cy")},
+                 {"pitch", sd("camera_misalignment_x_deg")},
+                 {"yaw", sd("camera_misalignment_y_deg")},
+                 {"roll", sd("camera_misalignment_z_deg")},
+                 {"scale", sd("target_scale_error")}};
+  if (model == DistortionModel::kThinPrism) {
+    e.error.insert(
+        {{"s1", d.s1 - s[0]}, {"s2", d.s2 - s[1]}, {"s3", d.s3 - s[2]}, {"s4", d.s4 - s[3]}});
+    e.stated_sd.insert({{"s1", sd("s1")}, {"s2", sd("s2")}, {"s3", sd("s3")}, {"s4", sd("s4")}});
+    const auto corr = [&](const char* a, const char* b) {
+      return r.correlation(rig::calibrate::parameter_index(a), rig::calibrate::parameter_index(b));
+    };
+    std::printf(
+        "  correlations: pitch-cy %+.3f pitch-s3 %+.3f cy-s3 %+.3f yaw-cx %+.3f "
+        "yaw-s1 %+.3f cx-s1 %+.3f\n",
+        corr("camera_misalignment_x_deg", "cy"), corr("camera_misalignment_x_deg", "s3"),
+        corr("cy", "s3"), corr("camera_misalignment_y_deg", "cx"),
+        corr("camera_misalignment_y_deg", "s1"), corr("cx", "s1"));
+  }
   std::printf(
-      "seed %2d: %zu frames, %zu of %zu fully visible markers detected, sigma %.4f px; "
-      "render+detect %.1f s, calibrate %.1f s\n"
+      "seed %2d %-10s: %zu frames, %zu of %zu fully visible markers detected, sigma %.4f px; "
+      "calibrate %.1f s\n"
       "  fx %+.5f %% fy %+.5f %% cx %+.3f cy %+.3f px, pitch %+.5f yaw %+.5f roll %+.5f deg, "
-      "distance %+.2f um, scale %+.2e\n",
-      static_cast<int>(seed), sweep.frames, sweep.detections, sweep.markers_fully_visible,
-      r.sigma_px, std::chrono::duration<double>(rendered - start).count(),
-      std::chrono::duration<double>(done - rendered).count(), 100 * e.error["fx"],
-      100 * e.error["fy"], e.error["cx"], e.error["cy"], e.error["pitch"], e.error["yaw"],
-      e.error["roll"], 1e6 * e.error["distance"], e.error["scale"]);
+      "distance %+.2f um, scale %+.2e; s1..s4 %+.2e %+.2e %+.2e %+.2e\n",
+      static_cast<int>(sweep.truth_seed), model == DistortionModel::kThinPrism ? "thin_prism" : "5",
+      sweep.frames, sweep.detections, sweep.markers_fully_visible, r.sigma_px,
+      std::chrono::duration<double>(done - start).count(), 100 * e.error["fx"], 100 * e.error["fy"],
+      e.error["cx"], e.error["cy"], e.error["pitch"], e.error["yaw"], e.error["roll"],
+      1e6 * e.error["distance"], e.error["scale"], d.s1, d.s2, d.s3, d.s4);
   return e;
+}
+
+SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) {
+  return calibrate_sweep(render_seed(seed, bow_sag_mm), CalibrationOptions{}.distortion);
 }
 
 // The brief's targets (fx, fy 0.02 %, principal point 0.2 px, camera
@@ -92,52 +130,161 @@ SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) 
 //    the detector's corners at 0.7 px of blur); bound 1e-5.
 // The sheet is rendered flat here: its bow (next test) is outside every
 // file's model, the calibration's and the truth's alike.
-TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
-  const std::map<std::string, double> bound = {
-      {"fx", 2e-4},      {"fy", 2e-4},    {"cx", 0.2},         {"cy", 0.2},    {"roll", 0.005},
-      {"pitch", 0.0105}, {"yaw", 0.0150}, {"distance", 20e-6}, {"scale", 1e-5}};
+// Errors and stated sds of one model over the seeds.
+struct OverSeeds {
   std::map<std::string, std::vector<double>> errors, stated;
-  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
-    const SeedErrors e = calibrate_seed(seed, 0.0);
-    for (const auto& [name, value] : e.error) {
+  void add(const SeedErrors& e) {
+    for (const auto& [name, value] : e.error)
       errors[name].push_back(value);
-      EXPECT_LT(std::abs(value), bound.at(name)) << name << " seed " << seed;
-    }
     for (const auto& [name, value] : e.stated_sd)
       stated[name].push_back(value);
   }
-  // Stated sd against the spread of the errors over the ten seeds (each seed
-  // draws its own truth and sensor noise). Within the brief's factor 2 for
-  // fx, fy, cx, yaw and roll (measured 0.53-1.86). Not for cy, pitch and the
-  // print scale (measured 0.31-0.39: the stated sd is 2.6-3.2 times the
-  // spread): the corner errors are not the independent noise the covariance
-  // assumes. The residual (sigma ~0.012 px) is mostly deterministic: the
-  // detector's corner bias under 0.7 px of blur and the unmodelled thin
-  // prism, the same shape in every seed, so it inflates the stated sd of the
-  // weakly determined directions while adding the same error to every seed
-  // (the mean errors above), not spread. Those three are checked against
-  // their measured range with ~35 % margin.
-  const std::map<std::string, std::pair<double, double>> ratio_range = {
-      {"fx", {0.5, 2.0}},   {"fy", {0.5, 2.0}},  {"cx", {0.5, 2.0}},     {"yaw", {0.5, 2.0}},
-      {"roll", {0.5, 2.0}}, {"cy", {0.2, 0.55}}, {"pitch", {0.2, 0.55}}, {"scale", {0.2, 0.55}}};
-  for (const auto& [name, values] : errors) {
-    double worst = 0, mean = 0;
-    for (const double v : values) {
-      worst = std::max(worst, std::abs(v));
-      mean += v / kSeeds;
-    }
-    const auto s = stated.find(name);
+  double worst(const std::string& name) const {
+    double w = 0;
+    for (const double v : errors.at(name))
+      w = std::max(w, std::abs(v));
+    return w;
+  }
+  // Spread of the errors over the seeds / mean stated sd.
+  double spread_over_stated(const std::string& name) const {
     double stated_mean = 0;
-    if (s != stated.end())
-      for (const double v : s->second)
-        stated_mean += v / kSeeds;
-    const double ratio = stated_mean > 0 ? db::stats::summarize(values).sd / stated_mean : 0.0;
-    std::printf("%-9s mean error %+.3g worst %.3g spread %.3g stated sd %.3g spread/stated %.2f\n",
-                name.c_str(), mean, worst, db::stats::summarize(values).sd, stated_mean, ratio);
-    const auto range = ratio_range.find(name);
-    if (range == ratio_range.end()) continue;
-    EXPECT_GT(ratio, range->second.first) << name;
-    EXPECT_LT(ratio, range->second.second) << name;
+    for (const double v : stated.at(name))
+      stated_mean += v / static_cast<double>(stated.at(name).size());
+    return db::stats::summarize(errors.at(name)).sd / stated_mean;
+  }
+  void print(const char* model) const {
+    for (const auto& [name, values] : errors) {
+      double mean = 0;
+      for (const double v : values)
+        mean += v / static_cast<double>(values.size());
+      const double spread = db::stats::summarize(values).sd;
+      const bool has_sd = stated.count(name) > 0;
+      std::printf("%-10s %-9s mean error %+.3g worst %.3g spread %.3g spread/stated %.2f\n", model,
+                  name.c_str(), mean, worst(name), spread, has_sd ? spread_over_stated(name) : 0.0);
+    }
+  }
+  double mean(const std::string& name) const {
+    double m = 0;
+    for (const double v : errors.at(name))
+      m += v / static_cast<double>(errors.at(name).size());
+    return m;
+  }
+  // The mean error in standard errors of the mean (spread / sqrt(seeds)).
+  double mean_in_standard_errors(const std::string& name) const {
+    const double spread = db::stats::summarize(errors.at(name)).sd;
+    return std::abs(mean(name)) / (spread / std::sqrt(static_cast<double>(kSeeds)));
+  }
+};
+
+// Both lens models on the same renders of the ten truths. The targets (fx,
+// fy 0.02 %, principal point 0.2 px, camera rotation 0.005 deg per axis,
+// distance at bench zero 20 um) are asserted where met; elsewhere the
+// measured bound or the stated standard deviation:
+//  - the 5-coefficient model (the default): the lens's thin prism (lab:
+//    s1 = 1e-4, s3 = -5e-5) bends the image like a small rotation combined
+//    with a principal-point shift, along the two nearly degenerate
+//    directions of a bench that never moves vertically (docs/calibration.md):
+//    every seed shows nearly the same cx +0.14 px with yaw +0.011 deg (0.011
+//    deg x fx 720 px = 0.14 px) and cy -0.08 px with pitch +0.006 deg, a
+//    common bias 16 to 92 standard errors of the mean from 0 (asserted > 10).
+//    Bounds: the worst measured (pitch 0.0081, yaw 0.0124 deg) plus ~20 %.
+//  - the thin prism fitted: the yaw and cx bias goes (mean errors within 3
+//    standard errors of 0; measured 1.3 and 1.5), pitch and cy keep one of
+//    the same size and the other sign (-0.007 deg, +0.09 px; 3.0 and 3.2
+//    standard errors), and s1 and s3 take the perspective terms that told
+//    the rotation from the principal point: correlations yaw-s1 -0.995 to
+//    -0.998, pitch-s3 +0.95 to +0.97, so pitch, yaw and cy scatter by their
+//    stated sd (~0.011 deg, 0.14 px) and are checked against 4 stated sd
+//    per seed (a Gaussian exceeds it with probability 6e-5).
+//  - the print scale: within 3.6e-6 of the truth (the bias of the
+//    detector's corners at 0.7 px of blur); bound 1e-5.
+// The sheet is rendered flat here: its bow (next test) is outside every
+// file's model, the calibration's and the truth's alike.
+TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
+  OverSeeds five, prism;
+  std::vector<SeedErrors> prism_seeds;
+  for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    const rig_test::SimTruthSweep sweep = render_seed(seed, 0.0);
+    five.add(calibrate_sweep(sweep, DistortionModel::kBrownConrady5));
+    prism_seeds.push_back(calibrate_sweep(sweep, DistortionModel::kThinPrism));
+    prism.add(prism_seeds.back());
+  }
+  five.print("5");
+  prism.print("thin_prism");
+  const std::map<std::string, double> five_bound = {
+      {"fx", 2e-4},      {"fy", 2e-4},    {"cx", 0.2},         {"cy", 0.2},    {"roll", 0.005},
+      {"pitch", 0.0105}, {"yaw", 0.0150}, {"distance", 20e-6}, {"scale", 1e-5}};
+  for (const auto& [name, b] : five_bound)
+    EXPECT_LT(five.worst(name), b) << "5 coefficients: " << name;
+  for (const char* name : {"pitch", "yaw", "cx", "cy"})
+    EXPECT_GT(five.mean_in_standard_errors(name), 10) << "5 coefficients: " << name;
+  for (const char* name : {"yaw", "cx"})
+    EXPECT_LT(prism.mean_in_standard_errors(name), 3) << "thin prism: " << name;
+  const std::map<std::string, double> prism_bound = {{"fx", 2e-4},        {"fy", 2e-4},
+                                                     {"cx", 0.2},         {"roll", 0.005},
+                                                     {"distance", 20e-6}, {"scale", 1e-5}};
+  for (const auto& [name, b] : prism_bound)
+    EXPECT_LT(prism.worst(name), b) << "thin prism: " << name;
+  for (const SeedErrors& e : prism_seeds)
+    for (const char* name : {"pitch", "yaw", "cy", "s1", "s2", "s3", "s4"})
+      EXPECT_LT(std::abs(e.error.at(name)), 4 * e.stated_sd.at(name)) << "thin prism: " << name;
+
+  // Stated sd against the spread of the errors over the ten seeds (each seed
+  // draws its own truth and sensor noise): within the brief's factor 2 where
+  // measured so (5: fx, fy, cx, yaw, roll, 0.55-1.97; thin prism: fx, fy,
+  // cy, pitch, s2..s4, 0.66-1.77). Below it elsewhere (5: cy, pitch, scale
+  // 0.39-0.47; thin prism: cx, yaw, roll, s1, scale 0.39-0.47): the stated
+  // sd is larger than the spread, because the corner errors are not the
+  // independent noise the covariance assumes. The residual (sigma ~0.012
+  // px) is mostly deterministic, the detector's corner bias under 0.7 px of
+  // blur, the same shape in every seed, so it inflates the stated sd of the
+  // weakly determined directions while adding the same error to every seed
+  // rather than spread. Those are checked against their measured range with
+  // ~30 % margin.
+  const std::pair<double, double> factor_2{0.5, 2.0}, below{0.25, 0.65};
+  const std::map<std::string, std::pair<double, double>> five_ratio = {
+      {"fx", factor_2},   {"fy", factor_2}, {"cx", factor_2}, {"yaw", factor_2},
+      {"roll", factor_2}, {"cy", below},    {"pitch", below}, {"scale", below}};
+  const std::map<std::string, std::pair<double, double>> prism_ratio = {
+      {"fx", factor_2}, {"fy", factor_2}, {"cy", factor_2}, {"pitch", factor_2},
+      {"s2", factor_2}, {"s3", factor_2}, {"s4", factor_2}, {"cx", below},
+      {"yaw", below},   {"roll", below},  {"s1", below},    {"scale", below}};
+  for (const auto& [name, range] : five_ratio) {
+    EXPECT_GT(five.spread_over_stated(name), range.first) << "5 coefficients: " << name;
+    EXPECT_LT(five.spread_over_stated(name), range.second) << "5 coefficients: " << name;
+  }
+  for (const auto& [name, range] : prism_ratio) {
+    EXPECT_GT(prism.spread_over_stated(name), range.first) << "thin prism: " << name;
+    EXPECT_LT(prism.spread_over_stated(name), range.second) << "thin prism: " << name;
+  }
+}
+
+// The lab lens's radial r^8 term (config/realism/lab.toml radial_k4 = 0.01,
+// 0.14 px at the image corner) is beyond every model rig calibrate fits,
+// but k1..k3 absorb most of it: rendered with and without it (seeds 1-2,
+// the default model), the fit's residual grows by less than a third of
+// itself in quadrature (the term's share of the residual; measured 0.0000
+// and 0.0004 px of 0.012 px), cx, cy, pitch and yaw move by less than their
+// stated sd: the detector's corner bias, not the unfitted lens term,
+// dominates what the fit leaves.
+TEST(CalibrateSimTruth, TheUnfittedRadialR8TermStaysBelowTheOtherResiduals) {
+  for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+    const DistortionModel model = CalibrationOptions{}.distortion;
+    const SeedErrors with = calibrate_sweep(render_seed(seed, 0.0), model);
+    const SeedErrors without = calibrate_sweep(render_seed(seed, 0.0, 0.0), model);
+    const double share = std::sqrt(
+        std::max(0.0, with.sigma_px * with.sigma_px - without.sigma_px * without.sigma_px));
+    std::printf("seed %d: sigma %.5f px with r^8, %.5f without; its share %.5f px\n",
+                static_cast<int>(seed), with.sigma_px, without.sigma_px, share);
+    EXPECT_LT(share, with.sigma_px / 3) << "seed " << seed;
+    for (const char* name : {"cx", "cy", "pitch", "yaw"})
+      EXPECT_LT(std::abs(with.error.at(name) - without.error.at(name)), with.stated_sd.at(name))
+          << name << " seed " << seed;
+    // k1..k3 absorb the r^8 term partly by a scale change: fx and fy move by
+    // 0.0004-0.0005 % (measured), a 40th of the 0.02 % target; bound a tenth.
+    for (const char* name : {"fx", "fy"})
+      EXPECT_LT(std::abs(with.error.at(name) - without.error.at(name)), 2e-5)
+          << name << " seed " << seed;
   }
 }
 
@@ -198,10 +345,11 @@ TEST(CalibrateSimTruth, BeatsOpenCvCalibrateCameraOnTheHiddenTruthData) {
       ours_held_out, cv_held_out);
   std::printf("| held-out RMS, pose refitted per view, px | - | %.4f |\n",
               cv_fit.pnp_held_out_rms_px);
-  // Measured: OpenCV's focal lengths are 40 times further off (+0.20 px
-  // against -0.005 px); its principal point is as far off as ours (both carry
-  // the thin prism's shift: cx +0.08 and +0.14 px, cy -0.09 and -0.11 px), and
-  // without a rig geometry it predicts the held-out positions 21 times worse.
+  // Measured: OpenCV's focal lengths are 30-58 times further off (+0.58
+  // px against -0.010 and -0.020 px); its principal point is about as far
+  // off as ours (both carry the thin prism's shift: cx +0.05 and +0.13 px,
+  // cy -0.09 px each), and without a rig geometry it predicts the held-out
+  // positions 21 times worse.
   EXPECT_LT(ours_held_out, cv_held_out);
   EXPECT_LT(std::abs(ours_err[0]), std::abs(cv_err[0]));
   EXPECT_LT(std::abs(ours_err[1]), std::abs(cv_err[1]));

@@ -60,7 +60,15 @@ TEST(Calibrate, RecoversTrueCameraAndGeometryOverTenSeeds) {
   const db_test::ScratchDir dir;
   const vision::Camera truth = rig_test::calibration_true_camera();
   const vision::RigGeometry true_geometry = rig_test::calibration_true_geometry();
-  const std::vector<int> checked = {0, 1, 2, 3, 4, 9, 10, 11, 15, 16, 17};
+  using rig::calibrate::parameter_index;
+  const int pitch = parameter_index("camera_misalignment_x_deg");
+  const int yaw = parameter_index("camera_misalignment_y_deg");
+  std::vector<int> checked;
+  for (const char* name :
+       {"fx", "fy", "cx", "cy", "k1", "camera_misalignment_x_deg", "camera_misalignment_y_deg",
+        "camera_misalignment_z_deg", "camera_to_target_x_mm", "camera_to_target_y_mm",
+        "camera_to_target_z_mm"})
+    checked.push_back(parameter_index(name));
   std::map<int, std::vector<double>> values, sds;
   for (std::uint64_t seed = 1; seed <= 10; ++seed) {
     const CalibrationProblem problem = problem_for(dir, seed, calibration_plan());
@@ -74,8 +82,10 @@ TEST(Calibrate, RecoversTrueCameraAndGeometryOverTenSeeds) {
     const Eigen::AngleAxisd error(true_geometry.T_carriage_cam.R.transpose() *
                                   r.geometry.T_carriage_cam.R);
     const Eigen::Vector3d error_deg = error.axis() * error.angle() * 180.0 / kPi;
-    EXPECT_LT(std::abs(error_deg.x()), 4 * r.parameters[9].sd) << "seed " << seed;
-    EXPECT_LT(std::abs(error_deg.y()), 4 * r.parameters[10].sd) << "seed " << seed;
+    EXPECT_LT(std::abs(error_deg.x()), 4 * r.parameters[static_cast<std::size_t>(pitch)].sd)
+        << "seed " << seed;
+    EXPECT_LT(std::abs(error_deg.y()), 4 * r.parameters[static_cast<std::size_t>(yaw)].sd)
+        << "seed " << seed;
     EXPECT_LT(std::abs(error_deg.z()), 0.005) << "seed " << seed;
     std::printf(
         "seed %2d: fx %+.4f fy %+.4f cx %+.3f cy %+.3f px, pitch %+.4f yaw %+.4f roll %+.4f deg, "
@@ -161,6 +171,46 @@ TEST(Calibrate, FixedParameterKeepsItsNominalValue) {
       2e-4);
   options.fixed = {"focal"};
   EXPECT_THROW(rig::calibrate::calibrate(problem, options), rig::calibrate::CalibrationInputError);
+}
+
+// Why the 5-coefficient model is the default: with 0.1 px of corner noise
+// (a real detector), fitting the thin prism too costs the directions a
+// horizontal bench barely separates. s1 r2 and s3 r2 shift the image like
+// the perspective terms (x^2, x y) that tell a yaw from a cx shift and a
+// pitch from a cy shift, so their stated sd grow (measured on seed 1: cx
+// 0.05 -> 1.3 px, cy 0.23 -> 1.15 px, pitch 0.018 -> 0.089 deg, yaw 0.004
+// -> 0.10 deg) while those of fx, fy and the distance at bench zero, which
+// the solvers are judged on, stay within 30 % (measured: fx +25 %, fy +7 %,
+// distance 0 %).
+// Asserted: the principal point's and the rotation's stated sd at least 3
+// times the 5-coefficient model's; the thin prism found within 4 stated sd
+// of 0 (probability of a false failure 6e-5 per coefficient, fixed seed).
+TEST(Calibrate, FittingTheThinPrismCostsThePrincipalPointAndRotationOnAHorizontalBench) {
+  const db_test::ScratchDir dir;
+  const CalibrationProblem problem = problem_for(dir, 1, calibration_plan());
+  CalibrationOptions prism_options;
+  prism_options.distortion = rig::calibrate::DistortionModel::kThinPrism;
+  const CalibrationResult five = rig::calibrate::calibrate(problem, CalibrationOptions{});
+  const CalibrationResult prism = rig::calibrate::calibrate(problem, prism_options);
+  const auto sd = [](const CalibrationResult& r, const char* name) {
+    return r.parameters[static_cast<std::size_t>(rig::calibrate::parameter_index(name))].sd;
+  };
+  for (const char* name : {"cx", "cy", "camera_misalignment_x_deg", "camera_misalignment_y_deg",
+                           "fx", "fy", "camera_to_target_x_mm"})
+    std::printf("%-28s stated sd %.3g (5 coefficients) %.3g (thin prism)\n", name, sd(five, name),
+                sd(prism, name));
+  for (const char* name : {"cx", "cy", "camera_misalignment_x_deg", "camera_misalignment_y_deg"})
+    EXPECT_GT(sd(prism, name), 3 * sd(five, name)) << name;
+  for (const char* name : {"fx", "fy", "camera_to_target_x_mm"})
+    EXPECT_LT(sd(prism, name), 1.3 * sd(five, name)) << name;
+  for (const char* name : {"s1", "s2", "s3", "s4"}) {
+    EXPECT_TRUE(
+        five.parameters[static_cast<std::size_t>(rig::calibrate::parameter_index(name))].fixed)
+        << name;
+    const double value =
+        prism.parameters[static_cast<std::size_t>(rig::calibrate::parameter_index(name))].value;
+    EXPECT_LT(std::abs(value), 4 * sd(prism, name)) << name;
+  }
 }
 
 // cv::calibrateCamera: tests/rig/calibrate/opencv_reference.hpp. Its held-out

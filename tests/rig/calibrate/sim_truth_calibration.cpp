@@ -22,6 +22,7 @@ SimTruthSweep render_calibration_sweep(const SimTruthSweepSpec& spec) {
       spec.source_dir + "/config/realism/" + spec.realism + ".toml");
   profile.truth.seed = spec.truth_seed;
   if (spec.bow_sag_mm) profile.scene.bow_sag_m = *spec.bow_sag_mm / 1000;
+  if (spec.radial_k4) profile.scene.radial_k4 = *spec.radial_k4;
   const vision::Target layout = vision::Target::load(calibration_target_path(spec.source_dir));
   rig::calibrate::CalibrationProblem problem;
   problem.source = "simulated calibration sweep, truth seed " + std::to_string(spec.truth_seed);
@@ -29,8 +30,9 @@ SimTruthSweep render_calibration_sweep(const SimTruthSweepSpec& spec) {
   problem.nominal_geometry = sim_nominal_geometry(spec.source_dir);
   problem.target = layout;
   SimTruthSweep out{
-      sim::camera::draw_truth(problem.nominal_camera, problem.nominal_geometry, layout, profile),
+      0, sim::camera::draw_truth(problem.nominal_camera, problem.nominal_geometry, layout, profile),
       std::move(problem)};
+  out.truth_seed = spec.truth_seed;
   sim::scene::SceneOptions options = profile.scene;
   options.thin_prism = out.truth.thin_prism;
   const vision::Codebook codebook;

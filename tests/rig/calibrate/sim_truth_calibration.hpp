@@ -21,6 +21,7 @@
 namespace rig_test {
 
 struct SimTruthSweep {
+  std::uint64_t truth_seed = 0;
   sim::camera::SimTruth truth;
   rig::calibrate::CalibrationProblem problem;
   std::size_t frames = 0, detections = 0, markers_fully_visible = 0;
@@ -34,6 +35,8 @@ struct SimTruthSweepSpec {
   int position_stride = 1;      // every n-th position of the plan
   // Replaces the profile's [target] bow_sag_mm when set (0: a flat sheet).
   std::optional<double> bow_sag_mm;
+  // Replaces the profile's [camera_truth] radial_k4 when set (0: no r^8 term).
+  std::optional<double> radial_k4;
 };
 
 // The nominal files of the simulated rig: config/sim.toml's camera (the

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "rig_command.hpp"
+#include "vision/camera.hpp"
 
 namespace {
 
@@ -84,6 +85,45 @@ TEST(RigSolve, SquareOnlySolversSaySkippedOnSixteenPoints) {
       EXPECT_NEAR(distance, 0.5, 1e-6) << e.dump();  // exact data
     }
   EXPECT_EQ(skipped, 2);
+}
+
+// A camera with a thin prism given as OpenCV's 12 coefficients: the points
+// are undistorted through it before solving, so every solver finds the
+// exact distance (1e-6 m: exact data, the solvers' own convergence). A
+// rational k4 is refused naming the coefficient.
+TEST(RigSolve, ThinPrismCoefficientsAreAppliedBeforeSolving) {
+  vision::Distortion d;
+  d.s1 = 1e-3;
+  d.s3 = -8e-4;
+  const vision::Camera camera({706.1, 731.1, 388.0, 269.6}, d, 736, 571);
+  nlohmann::json obj = nlohmann::json::array(), img = nlohmann::json::array();
+  for (double cx : {-0.1, 0.1})
+    for (double cy : {-0.1, 0.1})
+      for (auto [dx, dy] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}}) {
+        const double x = cx + dx * 0.025, y = cy + dy * 0.025;
+        obj.push_back({x, y, 0.0});
+        const Eigen::Vector2d px = camera.project({x, y, 0.5});
+        img.push_back({px.x(), px.y()});
+      }
+  auto j = sample();
+  j["camera"]["dist"] = {0, 0, 0, 0, 0, 0, 0, 0, d.s1, 0, d.s3, 0};
+  j["object_points"] = obj;
+  j["image_points"] = img;
+  const RigRun r = run_rig("solve --json -", j.dump());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int solved = 0;
+  const nlohmann::json out = nlohmann::json::parse(r.out);
+  for (const auto& e : out["estimates"])
+    if (!e.contains("skipped")) {
+      EXPECT_NEAR(e["distance_m"].get<double>(), 0.5, 1e-6) << e.dump();
+      ++solved;
+    }
+  EXPECT_GE(solved, 8);
+  j["camera"]["dist"][5] = 0.01;  // k4: OpenCV's rational model
+  const RigRun rational = run_rig("solve -", j.dump());
+  EXPECT_EQ(rational.exit_code, 2) << rational.err;
+  EXPECT_NE(rational.err.find("'camera.dist[5]' is a rational term"), std::string::npos)
+      << rational.err;
 }
 
 void expect_bad_input(const std::string& stdin_text, const std::string& words) {

@@ -156,6 +156,10 @@ TEST(Realism, UnknownKeysAndBadValuesAreRefusedNamingThem) {
   EXPECT_NE(profile_error("[camera_truth]\nthin_prism = [0.1, 0, 0, 0]\n")
                 .find("camera_truth.thin_prism"),
             std::string::npos);
+  EXPECT_NE(profile_error("[camera_truth]\nradial_k4 = 0.75\n")
+                .find("camera_truth.radial_k4 = 0.75: expected a number in -0.5 .. 0.5"),
+            std::string::npos)
+      << profile_error("[camera_truth]\nradial_k4 = 0.75\n");
   EXPECT_EQ(profile_error("name = \"ok\"\n"), "(accepted)");
 }
 
@@ -190,6 +194,7 @@ TEST(Realism, TheSameSeedDrawsTheSameTruthAndJsonHoldsIt) {
   EXPECT_EQ(j["camera"]["fx"].get<double>(), a.camera.intrinsics().fx);
   EXPECT_EQ(j["camera"]["k1"].get<double>(), a.camera.distortion().k1);
   EXPECT_EQ(j["camera"]["thin_prism"][0].get<double>(), p.scene.thin_prism[0]);
+  EXPECT_EQ(j["camera"]["radial_k4"].get<double>(), p.scene.radial_k4);
   EXPECT_EQ(j["T_carriage_cam"]["R"][1].get<double>(), a.geometry.T_carriage_cam.R(0, 1));
   EXPECT_EQ(j["T_bench_target"]["t_m"][2].get<double>(), a.geometry.T_bench_target.t.z());
   EXPECT_EQ(j["print_scale_error"].get<double>(), p.print_scale_error);
@@ -287,6 +292,51 @@ TEST(Realism, ThinPrismMovesTheImageAsModelled) {
   const cv::Point2d shift = cv::phaseCorrelate(wa, wb);
   EXPECT_NEAR(shift.x, mean_shift.x(), 0.05);
   EXPECT_NEAR(shift.y, mean_shift.y(), 0.05);
+}
+
+// The radial r^8 term beyond every fitted model moves each ground-truth
+// corner by exactly (fx x k4 r2^4, fy y k4 r2^4) (to rounding, 1e-9 px);
+// and a thin prism held by the camera's own model (vision::Camera's s1..s4)
+// renders the same corners as the same prism given to the renderer, so the
+// truth and a calibration that fits it describe one lens.
+TEST(Realism, RadialR8TermAndCameraThinPrismMoveTheCornersAsModelled) {
+  const vision::Camera camera = vision::Camera::paper_default();
+  const vision::Target target = vision::Target::paper_default();
+  sim::scene::SceneOptions r8 = noise_free();
+  r8.radial_k4 = 0.4;
+  const sim::scene::SceneRenderer plain(camera, target, vision::Codebook(), noise_free());
+  const sim::scene::SceneRenderer bent(camera, target, vision::Codebook(), r8);
+  const vision::Pose T = facing(0.25, {0.03, 0.02});
+  const auto a = plain.render(T, 1), b = bent.render(T, 1);
+  ASSERT_EQ(a.markers.size(), b.markers.size());
+  const auto& k = camera.intrinsics();
+  double largest = 0;
+  for (size_t m = 0; m < a.markers.size(); ++m)
+    for (int c = 0; c < 4; ++c) {
+      const Eigen::Vector3d p = T * target.corners_m(target.markers[m])[c];
+      const double x = p.x() / p.z(), y = p.y() / p.z(), r8_term = 0.4 * std::pow(x * x + y * y, 4);
+      const Eigen::Vector2d expected(k.fx * x * r8_term, k.fy * y * r8_term);
+      EXPECT_LT((b.markers[m].corners_px[c] - a.markers[m].corners_px[c] - expected).norm(), 1e-9);
+      largest = std::max(largest, expected.norm());
+    }
+  ASSERT_GT(largest, 0.01);  // the comparison above sees the term
+
+  vision::Distortion d = camera.distortion();
+  d.s1 = 0.002;
+  d.s3 = -0.0015;
+  const vision::Camera prism_camera(camera.intrinsics(), d, camera.width_px(), camera.height_px());
+  sim::scene::SceneOptions prism = noise_free();
+  prism.thin_prism = {0.002, 0.0, -0.0015, 0.0};
+  const auto in_camera =
+      sim::scene::SceneRenderer(prism_camera, target, vision::Codebook(), noise_free())
+          .render(T, 1);
+  const auto in_options =
+      sim::scene::SceneRenderer(camera, target, vision::Codebook(), prism).render(T, 1);
+  ASSERT_EQ(in_camera.markers.size(), in_options.markers.size());
+  for (size_t m = 0; m < in_camera.markers.size(); ++m)
+    for (int c = 0; c < 4; ++c)
+      EXPECT_LT((in_camera.markers[m].corners_px[c] - in_options.markers[m].corners_px[c]).norm(),
+                1e-9);
 }
 
 // A sheet printed (1 + s) times too large at pose (R, t) projects exactly as

@@ -1,16 +1,24 @@
-// vision::Camera: the pinhole camera with Brown-Conrady lens distortion.
+// vision::Camera: the pinhole camera with Brown-Conrady lens distortion and
+// thin-prism terms.
 //
 // Frames and units. A point p_cam (metres) in the camera frame (x right, y down,
 // z forward along the optical axis) projects to the normalized image point
 // (x, y) = (X/Z, Y/Z), is distorted (k1, k2, k3 radial; p1, p2 tangential, the
-// OpenCV / Brown-Conrady "plumb bob" model), and mapped to pixels by the
-// intrinsics. Pixels follow OpenCV's convention: the centre of the top-left
-// pixel is (0, 0).
+// OpenCV / Brown-Conrady "plumb bob" model; s1..s4 thin prism, Weng, Cohen &
+// Herniou, "Camera calibration with distortion models and accuracy
+// evaluation", IEEE PAMI 14(10), 1992, as OpenCV's CALIB_THIN_PRISM_MODEL),
+// and mapped to pixels by the intrinsics. Pixels follow OpenCV's convention:
+// the centre of the top-left pixel is (0, 0).
 //
 //   r2 = x^2 + y^2,  radial = 1 + k1 r2 + k2 r2^2 + k3 r2^3
-//   xd = x radial + 2 p1 x y + p2 (r2 + 2 x^2)
-//   yd = y radial + p1 (r2 + 2 y^2) + 2 p2 x y
+//   xd = x radial + 2 p1 x y + p2 (r2 + 2 x^2) + s1 r2 + s2 r2^2
+//   yd = y radial + p1 (r2 + 2 y^2) + 2 p2 x y + s3 r2 + s4 r2^2
 //   u  = fx xd + cx,  v = fy yd + cy
+//
+// This is cv::projectPoints with the 12 coefficients (k1 k2 p1 p2 k3 k4 k5 k6
+// s1 s2 s3 s4) and the rational terms k4 = k5 = k6 = 0: OpenCV's rational
+// model is not represented (a calibration file with non-zero k4..k6 is
+// refused), nor is its sensor tilt (tau_x, tau_y of 14 coefficients).
 //
 // The pose solvers work on undistorted normalized points; distortion is handled
 // here, once (see vision/correspondences.hpp).
@@ -39,9 +47,12 @@ struct Intrinsics {
   double cy = 0;  // principal point v, pixels
 };
 
-// Brown-Conrady coefficients in OpenCV's order (k1, k2, p1, p2, k3); dimensionless.
+// Brown-Conrady coefficients in OpenCV's order (k1, k2, p1, p2, k3), then the
+// thin-prism coefficients s1..s4 (OpenCV's coefficients 9-12); dimensionless.
 struct Distortion {
   double k1 = 0, k2 = 0, p1 = 0, p2 = 0, k3 = 0;
+  double s1 = 0, s2 = 0, s3 = 0, s4 = 0;
+  bool has_thin_prism() const { return s1 != 0 || s2 != 0 || s3 != 0 || s4 != 0; }
 };
 
 class Camera {
@@ -57,10 +68,13 @@ class Camera {
 
   // Loads a calibration file, detecting the format by its content:
   //  - OpenCV FileStorage (YAML or XML, as written by calibrateCamera tools):
-  //    `camera_matrix` (3x3), `distortion_coefficients` (4, 5 or more values;
-  //    terms past k3 must be zero), `image_width`, `image_height`;
+  //    `camera_matrix` (3x3), `distortion_coefficients` in OpenCV's order
+  //    (4, 5, 8, 12 or 14 values: k1 k2 p1 p2 [k3 [k4 k5 k6 [s1 s2 s3 s4
+  //    [tau_x tau_y]]]]; the rational k4..k6 and the tilt tau must be zero),
+  //    `image_width`, `image_height`;
   //  - ROS camera_info YAML: `image_width`, `image_height`,
-  //    `camera_matrix: {rows, cols, data}`, `distortion_model: plumb_bob`,
+  //    `camera_matrix: {rows, cols, data}`, `distortion_model: plumb_bob` (5
+  //    values) or `rational_polynomial` (8 or 12 values, the order above),
   //    `distortion_coefficients: {rows, cols, data}`.
   // Throws CalibrationError naming the file and the key on a missing file, a
   // missing key, a malformed matrix or an unsupported distortion model, and
@@ -69,7 +83,8 @@ class Camera {
   // (OpenCV's parsers recurse once per level).
   static Camera load(const std::string& path);
 
-  // Writes the calibration as an OpenCV FileStorage file (.yaml, .yml or .xml).
+  // Writes the calibration as an OpenCV FileStorage file (.yaml, .yml or .xml):
+  // 5 distortion coefficients, or 12 (k4..k6 = 0) when it has a thin prism.
   void save(const std::string& path) const;
 
   const Intrinsics& intrinsics() const { return intrinsics_; }
@@ -89,7 +104,8 @@ class Camera {
 
   // K as a 3x3 matrix (pixels).
   Eigen::Matrix3d K() const;
-  // The same model as OpenCV expects it: 3x3 CV_64F and 1x5 CV_64F.
+  // The same model as OpenCV expects it: 3x3 CV_64F and 1x5 CV_64F, or 1x12
+  // (k1 k2 p1 p2 k3 0 0 0 s1 s2 s3 s4) when it has a thin prism.
   cv::Mat camera_matrix_cv() const;
   cv::Mat distortion_cv() const;
 
@@ -110,7 +126,8 @@ class Camera {
   // accepted when the re-distorted point is within 1e-9 px of the input.
   // Returns false (and leaves xy NaN) when no such point exists on the lens's
   // own branch (the one containing the centre, before the polynomial folds
-  // back): outside the region where the model is invertible, which for real
+  // back; the thin prism, a shift of at most |s| r2 (1 + r2), is left out of
+  // that test): outside the region where the model is invertible, which for real
   // lenses lies far beyond the image.
   bool undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) const;
 

@@ -7,7 +7,8 @@
 // bundle adjustment (Ceres, Huber loss) over every detected corner of every
 // frame of a calibration sweep estimates at once:
 //   - the intrinsics fx, fy, cx, cy (px) and distortion k1, k2, p1, p2, k3
-//     (vision/camera.hpp), each fixable;
+//     and (DistortionModel::kThinPrism) the thin prism s1..s4 (Weng, Cohen &
+//     Herniou 1992; vision/camera.hpp), each fixable;
 //   - the camera rotation relative to the bench axes, R_bench_cam =
 //     R_nominal * Rot(misalignment) (rotation vector, degrees, about the
 //     nominal camera axes as in a rig file, docs/frames.md);
@@ -98,17 +99,26 @@ struct CalibrationProblem {
 CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64_t> run_id);
 
 // The parameters, in this order (names as in calibration.json).
-constexpr int kParameterCount = 19;
-constexpr int kIntrinsicCount = 9;  // the first nine: fx fy cx cy k1 k2 p1 p2 k3
+constexpr int kParameterCount = 23;
+constexpr int kIntrinsicCount = 13;  // the first 13: fx fy cx cy k1 k2 p1 p2 k3 s1 s2 s3 s4
 extern const std::array<const char*, kParameterCount> kParameterNames;
 extern const std::array<const char*, kParameterCount> kParameterUnits;
 // Index in kParameterNames of `name`; -1 when there is none.
 int parameter_index(const std::string& name);
 
+// The lens model the bundle adjustment fits: Brown-Conrady's 5 coefficients
+// (k1 k2 p1 p2 k3; s1..s4 held at their nominal values), or those and the
+// thin prism s1..s4 (OpenCV's 12-coefficient model with k4..k6 = 0). The thin
+// prism is a tilt of a lens element or of the sensor (Weng et al. 1992); left
+// out, its image shift biases the camera's pitch and yaw and the principal
+// point (docs/calibration.md).
+enum class DistortionModel { kBrownConrady5, kThinPrism };
+
 struct CalibrationOptions {
-  // Parameters held at their nominal values, by name: an intrinsic ("k3") or
-  // "target_scale_error" (held at 0: the sheet is exactly its layout).
+  // Parameters held at their nominal values, by name: an intrinsic ("k3",
+  // "s2") or "target_scale_error" (held at 0: the sheet is exactly its layout).
   std::vector<std::string> fixed;
+  DistortionModel distortion = DistortionModel::kBrownConrady5;
   double huber_px = 1.0;  // robust loss scale, px of corner error
   int threads = 2;        // Ceres threads
   int max_iterations = 100;

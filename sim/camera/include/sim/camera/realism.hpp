@@ -22,6 +22,7 @@
 //   k2_sigma = 0.0                     # radial k2
 //   tangential_sigma = 0.0             # p1, p2 each
 //   thin_prism = [s1, s2, s3, s4]      # fixed extra terms (sim::scene::SceneOptions::thin_prism)
+//   radial_k4 = 0.0                    # radial r^8 term (SceneOptions::radial_k4)
 //   [rig_truth]
 //   mount_rotation_sigma_deg = 0.2     # each axis of the camera mount's rotation vector
 //   mount_offset_sigma_mm = 0.5        # each axis of the camera's optical centre offset
@@ -185,8 +186,8 @@ SimTruth draw_truth(const vision::Camera& nominal_camera,
 vision::Target scaled_target(const vision::Target& target, double scale_error);
 
 // The truth as JSON: profile name, camera (width, height, fx, fy, cx, cy, k1,
-// k2, p1, p2, k3, thin_prism), T_carriage_cam and T_bench_target (R row-major,
-// t in metres), print_scale_error.
+// k2, p1, p2, k3, thin_prism, radial_k4), T_carriage_cam and T_bench_target
+// (R row-major, t in metres), print_scale_error.
 std::string truth_json(const SimTruth& truth, const RealismProfile& profile);
 
 }  // namespace sim::camera

@@ -112,12 +112,19 @@ struct SceneOptions {
   double vignetting = 0.25;
   // Thin-prism lens terms s1..s4 of the true lens (OpenCV's order, Weng et
   // al. 1992): xd += s1 r2 + s2 r2^2, yd += s3 r2 + s4 r2^2 on top of the
-  // camera's Brown-Conrady model, r2 on the normalized image plane. Beyond
-  // vision::Camera's 5-parameter model, so a calibration cannot fit them
-  // exactly; a decentred or tilted lens element gives |s| ~ 1e-4 .. 1e-3.
+  // camera's own model, r2 on the normalized image plane; a decentred or
+  // tilted lens element gives |s| ~ 1e-4 .. 1e-3. vision::Camera holds them
+  // too, so a calibration can fit them (rig calibrate --distortion).
   // Rendering and ground truth (MarkerTruth::corners_px) both use them.
   // All 0 (default): the camera's own model exactly.
   std::array<double, 4> thin_prism{};
+  // The radial term of the next order, r^8 (Brown, "Close-range camera
+  // calibration", Photogrammetric Engineering 37(8), 1971: the radial series
+  // k1 r^2 + k2 r^4 + k3 r^6 + k4 r^8 + ..., which calibrations truncate
+  // after k3): x_d += x k4 r2^4, y_d += y k4 r2^4. No model vision::Camera
+  // holds has it (OpenCV's k4 is the rational model's), so no calibration
+  // fits the true lens exactly. 0 (default): none.
+  double radial_k4 = 0;
 
   // --- sensor ---
   // Fraction of the full well that a perfect white (reflectance 1) at full
