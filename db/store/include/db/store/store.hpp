@@ -92,7 +92,7 @@ std::string sqlite_library_version();
 class Store {
  public:
   // Schema version this code creates and reads (the number of migrations).
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   // PRAGMA application_id of a rig run database: "RIGD" in ASCII.
   static constexpr std::int32_t kApplicationId = 0x52494744;
 
