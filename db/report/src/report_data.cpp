@@ -34,11 +34,14 @@ const char* const kDetectionsQuery =
     "WHERE p.run_id = ?1 AND d.detector = (SELECT primary_detector FROM runs WHERE id = ?1) "
     "ORDER BY p.plan_index, f.frame_index";
 
-// Per detector: the markers in view it found (each marker once a frame), and
-// the true-corner RMS of those detections.
+// Per detector: the markers in view it found (each marker once a frame), the
+// true-corner RMS of those detections within kMisplacedPx of the truth, and
+// how many were farther (a marker's id decoded at another place).
 const char* const kDetectorQuery =
     "SELECT d.detector, count(DISTINCT d.frame_id * 65536 + d.marker_id), "
-    "sum(d.true_corner_rms_px * d.true_corner_rms_px), count(d.true_corner_rms_px) "
+    "sum(CASE WHEN d.true_corner_rms_px <= 10.0 THEN d.true_corner_rms_px * "
+    "d.true_corner_rms_px END), count(CASE WHEN d.true_corner_rms_px <= 10.0 THEN 1 END), "
+    "count(CASE WHEN d.true_corner_rms_px > 10.0 THEN 1 END) "
     "FROM positions p JOIN frames f ON f.position_id = p.id "
     "JOIN detections d ON d.frame_id = f.id "
     "JOIN visible_markers v ON v.position_id = p.id AND v.marker_id = d.marker_id "
@@ -474,6 +477,7 @@ void read_detectors(store::sqlite::Connection& connection, std::int64_t id, RunD
     d.views_found = static_cast<std::size_t>(select.get_int64(1));
     d.corner_sum_squares_px2 = select.get_optional_double(2).value_or(0);
     d.corners_vs_truth = static_cast<std::size_t>(select.get_int64(3));
+    d.misplaced = static_cast<std::size_t>(select.get_int64(4));
   }
   const std::string& primary = data.run.description.primary_detector;
   if (by_name.count(primary) != 0) data.detectors.push_back(by_name[primary]);

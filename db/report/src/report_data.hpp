@@ -79,6 +79,7 @@ struct DetectorData {
   std::size_t views_found = 0;        // markers in view found, each once per frame
   std::size_t corners_vs_truth = 0;   // of those, detections with a true-corner RMS
   double corner_sum_squares_px2 = 0;  // sum of their squared true-corner RMS, px^2
+  std::size_t misplaced = 0;          // detections of markers in view > 10 px from their truth
 };
 
 struct RunData {

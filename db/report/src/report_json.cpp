@@ -170,6 +170,7 @@ json to_json(const RunStudy& st) {
                          {"views_in_view", d.views_in_view},
                          {"corner_rms_px", d.corner_rms_px},
                          {"corners_vs_truth", d.corners_vs_truth},
+                         {"misplaced", d.misplaced},
                          {"time_per_frame_s", d.time_per_frame_s}});
   json events = json::array();
   for (const store::RunEvent& e : st.events)

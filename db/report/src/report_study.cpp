@@ -563,6 +563,7 @@ std::vector<DetectorStudy> study_detectors(const RunData& data) {
     s.views_in_view = in_view;
     s.views_found = d.views_found;
     s.corners_vs_truth = d.corners_vs_truth;
+    s.misplaced = d.misplaced;
     s.corner_rms_px =
         d.corners_vs_truth > 0
             ? std::sqrt(d.corner_sum_squares_px2 / static_cast<double>(d.corners_vs_truth))

@@ -278,10 +278,13 @@ struct DetectorStudy {
   std::size_t views_in_view = 0;  // markers in view x frames, over the measured positions
   std::size_t views_found = 0;    // of those, found (each marker once per frame)
   // RMS distance of the found markers' corners from their true corners (the
-  // layout projected through the run's camera at the true pose), px; NaN
-  // when none was recorded (runs before schema 5).
+  // layout projected through the run's camera at the true pose), px, over
+  // the detections within 10 px of the truth (a calibration's error is a
+  // few px at most; beyond, the id was decoded somewhere else); NaN when
+  // none was recorded (runs before schema 5).
   double corner_rms_px = 0;
   std::size_t corners_vs_truth = 0;  // detections it is over
+  std::size_t misplaced = 0;         // detections of markers in view farther than 10 px
   // Mean detector time per frame, seconds (stage "detect:DETECTOR"; for the
   // primary detector of a run before schema 5, stage "detect"); NaN: not recorded.
   double time_per_frame_s = 0;
