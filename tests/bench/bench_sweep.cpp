@@ -162,12 +162,12 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
   std::map<std::string, double> solve_s;
   for (int k = 0; k < frames_per_position; ++k) {
     const vision::FrameMeasurement m = measurer.measure(p.frames[static_cast<std::size_t>(k)]);
-    detect_s += m.detect_s;
-    for (const auto& [name, s] : m.solve_s) {
+    detect_s += m.primary().detect_s;
+    for (const auto& [name, s] : m.primary().solve_s) {
       solve_s[name] += s;
       sums.solve += s;
     }
-    sums.detections += static_cast<std::int64_t>(m.detections.size());
+    sums.detections += static_cast<std::int64_t>(m.primary().detections.size());
     const auto record_start = Clock::now();
     db::store::FrameRecord f = rig::sweep::to_frame_record(m, k);
     f.host_timestamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(

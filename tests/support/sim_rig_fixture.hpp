@@ -41,6 +41,11 @@ struct SweepFileOptions {
   std::string calibration;  // "" = the paper camera
   std::string extra_capture;
   std::string extra_faults;  // more [faults] keys, one "key = value\n" each
+  // [detect] detectors as TOML ("" = the key left out: every detector that
+  // reads the target's family). rig's alone by default: the tests of the
+  // sweep's other parts need one detector's rows, and seven detectors cost
+  // several times the measurement time per frame.
+  std::string detectors = "[\"rig\"]";
   // Telemetry endpoints. Ports chosen at bind time by default, so that no
   // test needs a fixed port to be free; the sweep prints the ports on its
   // first line. Two loopback addresses: the sweep refuses two identical
@@ -106,7 +111,9 @@ class SimRig {
         << "\"\nspeed_mm_s = 100\n\n[faults]\non_alarm = \"" << o.on_alarm
         << "\"\nmax_consecutive_failed = " << o.max_consecutive_failed << "\n"
         << o.extra_faults << "\n[target]\nlayout = \"" << repo_path("config/targets/paper.toml")
-        << "\"\n\n[rig]\nfile = \"" << repo_path("config/rigs/sim.toml")
+        << "\"\n"
+        << (o.detectors.empty() ? "" : "\n[detect]\ndetectors = " + o.detectors + "\n")
+        << "\n[rig]\nfile = \"" << repo_path("config/rigs/sim.toml")
         << "\"\n\n[database]\npath = \"" << database()
         << "\"\ndurable_commits = true\n\n[telemetry]\npublish = \"" << o.telemetry_publish
         << "\"\ncontrol = \"" << o.telemetry_control << "\"\n";

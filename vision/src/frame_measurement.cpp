@@ -1,11 +1,13 @@
 #include "vision/frame_measurement.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <utility>
 
 #include "vision/codebook.hpp"
 #include "vision/correspondences.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/solvers.hpp"
 #include "vision/timing.hpp"
 
@@ -81,7 +83,7 @@ std::optional<double> generalization_error_px(const Correspondences& reference,
 // generalization error. Corners no solver can take go to m.scope_errors.
 void solve_scope(const Solvers& solvers, const Camera& camera, const Target& target,
                  const std::string& scope, const std::vector<const Detection*>& markers,
-                 const std::optional<Correspondences>& reference, FrameMeasurement& m) {
+                 const std::optional<Correspondences>& reference, DetectorMeasurement& m) {
   Correspondences corners;
   try {
     corners = marker_corners(camera, target, markers);
@@ -99,34 +101,71 @@ void solve_scope(const Solvers& solvers, const Camera& camera, const Target& tar
   }
 }
 
+// The detectors to measure, in registry order, each once; empty: the first
+// that reads `family`. Throws DetectorRegistryError (make_detector's) for an
+// unknown one or one that cannot decode the family.
+std::vector<std::string> measured_detectors(const std::vector<std::string>& wanted,
+                                            const std::string& family) {
+  if (wanted.empty()) {
+    const std::vector<std::string> able = detectors_for_family(family);
+    if (able.empty()) {
+      throw DetectorRegistryError("marker family \"" + family +
+                                  "\": no detector decodes it; expected a family of " +
+                                  MarkerFamily::names_text());
+    }
+    return {able.front()};
+  }
+  for (const std::string& name : wanted) {
+    const auto& known = vision::detector_names();
+    if (std::find(known.begin(), known.end(), name) == known.end())
+      throw DetectorRegistryError("detector \"" + name + "\": expected one of " +
+                                  detector_names_text());
+  }
+  std::vector<std::string> ordered;
+  for (const std::string& name : vision::detector_names())
+    if (std::find(wanted.begin(), wanted.end(), name) != wanted.end()) ordered.push_back(name);
+  return ordered;
+}
+
+DetectorMeasurement measure_with(const FiducialDetector& detector, const Solvers& solvers,
+                                 const Camera& camera, const Target& target, const cv::Mat& image) {
+  DetectorMeasurement m;
+  m.detector = detector.name();
+  const auto detect_start = std::chrono::steady_clock::now();
+  m.detections = detector.detect(image);
+  m.detect_s = seconds_since(detect_start);
+
+  const LayoutMarkers markers = layout_markers(m.detections, target);
+  std::vector<const Detection*> all;
+  if (markers.pose_marker) {
+    solve_scope(solvers, camera, target, std::to_string(markers.pose_marker->id),
+                {markers.pose_marker}, generalization_reference(camera, target, markers.others), m);
+    all.push_back(markers.pose_marker);
+  }
+  all.insert(all.end(), markers.others.begin(), markers.others.end());
+  if (!all.empty()) solve_scope(solvers, camera, target, "target", all, std::nullopt, m);
+  return m;
+}
+
 }  // namespace
 
 FrameMeasurer::FrameMeasurer(vision::Camera camera, vision::Target target,
-                             vision::DetectorParameters parameters)
+                             vision::DetectorParameters parameters,
+                             std::vector<std::string> detectors)
     : camera_(std::move(camera)),
       target_(std::move(target)),
-      detector_(camera_, vision::Codebook(), parameters),
+      detector_names_(measured_detectors(detectors, target_.family)),
       solvers_(vision::make_all_solvers()) {
+  for (const std::string& name : detector_names_)
+    detectors_.push_back(make_detector(name, camera_, target_.family, parameters));
   for (const auto& s : solvers_)
     names_.push_back(s->name());
 }
 
 FrameMeasurement FrameMeasurer::measure(const cv::Mat& image) const {
   FrameMeasurement m;
-  const auto detect_start = std::chrono::steady_clock::now();
-  m.detections = detector_.detect(image);
-  m.detect_s = seconds_since(detect_start);
-
-  const LayoutMarkers markers = layout_markers(m.detections, target_);
-  std::vector<const Detection*> all;
-  if (markers.pose_marker) {
-    solve_scope(solvers_, camera_, target_, std::to_string(markers.pose_marker->id),
-                {markers.pose_marker}, generalization_reference(camera_, target_, markers.others),
-                m);
-    all.push_back(markers.pose_marker);
-  }
-  all.insert(all.end(), markers.others.begin(), markers.others.end());
-  if (!all.empty()) solve_scope(solvers_, camera_, target_, "target", all, std::nullopt, m);
+  for (const auto& detector : detectors_)
+    m.detectors.push_back(measure_with(*detector, solvers_, camera_, target_, image));
   return m;
 }
 

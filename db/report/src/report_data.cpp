@@ -12,12 +12,17 @@
 
 namespace db::report {
 
+// A solver's series is named after the solver for the run's primary
+// detector and "SOLVER@DETECTOR" for another detector's corners
+// (series_name, report.hpp): every table, figure and comparison keys by both.
 const char* const kEstimatesQuery =
-    "SELECT p.plan_index, f.frame_index, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
+    "SELECT p.plan_index, f.frame_index, "
+    "CASE WHEN e.detector = r.primary_detector THEN e.solver "
+    "ELSE e.solver || '@' || e.detector END, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
     "e.r12, e.r20, e.r21, e.r22, e.distance_m, e.reprojection_error_px, "
     "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio, "
     "e.tx_m, e.ty_m, e.tz_m "
-    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "FROM runs r JOIN positions p ON p.run_id = r.id JOIN frames f ON f.position_id = p.id "
     "JOIN estimates e ON e.frame_id = f.id "
     "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
 
@@ -26,7 +31,28 @@ const char* const kDetectionsQuery =
     "d.c_x_px, d.c_y_px, d.d_x_px, d.d_y_px, d.edge_fit_residual_px "
     "FROM positions p JOIN frames f ON f.position_id = p.id "
     "JOIN detections d ON d.frame_id = f.id "
-    "WHERE p.run_id = ?1 ORDER BY p.plan_index, f.frame_index";
+    "WHERE p.run_id = ?1 AND d.detector = (SELECT primary_detector FROM runs WHERE id = ?1) "
+    "ORDER BY p.plan_index, f.frame_index";
+
+// Per detector: the markers in view it found (each marker once a frame), the
+// true-corner RMS of those detections within kMisplacedPx of the truth, and
+// how many were farther (a marker's id decoded at another place).
+const char* const kDetectorQuery =
+    "SELECT d.detector, count(DISTINCT d.frame_id * 65536 + d.marker_id), "
+    "sum(CASE WHEN d.true_corner_rms_px <= 10.0 THEN d.true_corner_rms_px * "
+    "d.true_corner_rms_px END), count(CASE WHEN d.true_corner_rms_px <= 10.0 THEN 1 END), "
+    "count(CASE WHEN d.true_corner_rms_px > 10.0 THEN 1 END) "
+    "FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN detections d ON d.frame_id = f.id "
+    "JOIN visible_markers v ON v.position_id = p.id AND v.marker_id = d.marker_id "
+    "WHERE p.run_id = ?1 GROUP BY d.detector";
+
+// The detectors of a run: those of its estimates and detections.
+const char* const kDetectorNamesQuery =
+    "SELECT DISTINCT e.detector FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN estimates e ON e.frame_id = f.id WHERE p.run_id = ?1 "
+    "UNION SELECT DISTINCT d.detector FROM positions p JOIN frames f ON f.position_id = p.id "
+    "JOIN detections d ON d.frame_id = f.id WHERE p.run_id = ?1";
 
 const char* const kFramesQuery =
     "SELECT p.plan_index, count(f.id) FROM positions p JOIN frames f ON f.position_id = p.id "
@@ -434,6 +460,31 @@ void read_detections(store::sqlite::Connection& connection, std::int64_t id, con
     flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
 }
 
+// The run's detectors, the primary first, with what kDetectorQuery counts.
+void read_detectors(store::sqlite::Connection& connection, std::int64_t id, RunData& data) {
+  std::map<std::string, DetectorData> by_name;
+  {
+    store::sqlite::Statement names(connection, kDetectorNamesQuery);
+    names.bind(1, id);
+    while (names.step())
+      by_name[names.get_text(0)].detector = names.get_text(0);
+  }
+  store::sqlite::Statement select(connection, kDetectorQuery);
+  select.bind(1, id);
+  while (select.step()) {
+    DetectorData& d = by_name[select.get_text(0)];
+    d.detector = select.get_text(0);
+    d.views_found = static_cast<std::size_t>(select.get_int64(1));
+    d.corner_sum_squares_px2 = select.get_optional_double(2).value_or(0);
+    d.corners_vs_truth = static_cast<std::size_t>(select.get_int64(3));
+    d.misplaced = static_cast<std::size_t>(select.get_int64(4));
+  }
+  const std::string& primary = data.run.description.primary_detector;
+  if (by_name.count(primary) != 0) data.detectors.push_back(by_name[primary]);
+  for (const auto& [name, d] : by_name)
+    if (name != primary) data.detectors.push_back(d);
+}
+
 }  // namespace
 
 RunData load_run(const std::string& database, std::optional<std::int64_t> run_id,
@@ -463,6 +514,7 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   read_frame_counts(connection, id, slots, data.positions);
   read_estimates(connection, id, slots, data);
   read_detections(connection, id, slots, data);
+  read_detectors(connection, id, data);
   transaction.commit();
   return data;
 }

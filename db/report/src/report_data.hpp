@@ -73,6 +73,15 @@ struct PositionData {
   std::vector<MarkerAtPosition> markers;  // detected markers, by id
 };
 
+// What the detections of one detector add up to over a run.
+struct DetectorData {
+  std::string detector;
+  std::size_t views_found = 0;        // markers in view found, each once per frame
+  std::size_t corners_vs_truth = 0;   // of those, detections with a true-corner RMS
+  double corner_sum_squares_px2 = 0;  // sum of their squared true-corner RMS, px^2
+  std::size_t misplaced = 0;          // detections of markers in view > 10 px from their truth
+};
+
 struct RunData {
   std::string database;
   store::Run run;
@@ -84,6 +93,7 @@ struct RunData {
   // detector bug, left out of every detection figure (as if not detected)
   // and counted here rather than poisoning the corner noise.
   std::size_t nonfinite_detections = 0;
+  std::vector<DetectorData> detectors;  // the primary detector first, then by name
 };
 
 // Opens `database` read-only and picks the run (run_id or the latest

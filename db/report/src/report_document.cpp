@@ -161,6 +161,11 @@ Document build_document(const ReportInput& in) {
     add_comparison(in, sec);
     doc.sections.push_back(std::move(sec));
   }
+  if (!in.study.detectors.empty()) {
+    Section sec{"detectors", "Detectors x solvers", {}};
+    add_detector_tables(in, sec);
+    doc.sections.push_back(std::move(sec));
+  }
   // Scopes in order: the pose marker's (its id, "0" by default), then "target".
   std::vector<std::string> scopes;
   for (const SolverStudy& s : in.study.solvers) {

@@ -58,6 +58,10 @@ void add_paper_figures(const ReportInput& input, const std::string& scope, Secti
 void add_beyond_tables(const ReportInput& input, Section& section);
 void add_beyond_figures(const ReportInput& input, Section& section);
 void add_comparison(const ReportInput& input, Section& section);
+// The detectors of the run against each other: detection rate, corner RMS
+// against the truth, time per frame, and each solver's mean |distance
+// error| on each detector's corners (pose-marker scope).
+void add_detector_tables(const ReportInput& input, Section& section);
 // The run header (what was measured, with which camera, calibration,
 // geometry and bench or simulated rig) and the summary table: one row per
 // solver and scope, worst first against a baseline (report_summary.cpp).

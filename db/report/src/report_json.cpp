@@ -162,6 +162,16 @@ json to_json(const RunStudy& st) {
                       {"seconds", to_json(s.seconds)},
                       {"median_s", s.median_s},
                       {"p95_s", s.p95_s}});
+  json detectors = json::array();
+  for (const DetectorStudy& d : st.detectors)
+    detectors.push_back({{"detector", d.detector},
+                         {"primary", d.primary},
+                         {"views_found", d.views_found},
+                         {"views_in_view", d.views_in_view},
+                         {"corner_rms_px", d.corner_rms_px},
+                         {"corners_vs_truth", d.corners_vs_truth},
+                         {"misplaced", d.misplaced},
+                         {"time_per_frame_s", d.time_per_frame_s}});
   json events = json::array();
   for (const store::RunEvent& e : st.events)
     events.push_back({{"at", e.at},
@@ -178,6 +188,7 @@ json to_json(const RunStudy& st) {
             {"plan_size", st.run.description.plan_size},
             {"software_version", st.run.description.software_version},
             {"host", st.run.description.host},
+            {"primary_detector", st.run.description.primary_detector},
             {"camera", camera_json(st.run)},
             {"files", files_json(st.run.description)}}},
           {"truth", truth_json(st)},
@@ -197,6 +208,7 @@ json to_json(const RunStudy& st) {
           {"marker_sizes", sizes},
           {"missed_markers", missed},
           {"stages", stages},
+          {"detectors", detectors},
           {"events", events}};
 }
 

@@ -542,7 +542,48 @@ void mark_coinciding(std::vector<SolverStudy>& solvers, double tolerance) {
   }
 }
 
+// Per detector: the markers in view over the measured positions' frames, the
+// stored counts, and the time per frame from the stage times.
+std::vector<DetectorStudy> study_detectors(const RunData& data) {
+  std::size_t in_view = 0, frames = 0;
+  std::map<std::string, double> detect_s;  // by stage name
+  for (const PositionData& p : data.positions) {
+    if (p.record.status != store::PositionStatus::kOk) continue;
+    in_view += p.record.visible_markers.size() * p.frames;
+    frames += p.frames;
+    for (const store::StageTime& t : p.record.stage_times)
+      if (t.stage.rfind("detect", 0) == 0 && std::isfinite(t.seconds))
+        detect_s[t.stage] += t.seconds;
+  }
+  std::vector<DetectorStudy> out;
+  for (const DetectorData& d : data.detectors) {
+    DetectorStudy s;
+    s.detector = d.detector;
+    s.primary = d.detector == data.run.description.primary_detector;
+    s.views_in_view = in_view;
+    s.views_found = d.views_found;
+    s.corners_vs_truth = d.corners_vs_truth;
+    s.misplaced = d.misplaced;
+    s.corner_rms_px =
+        d.corners_vs_truth > 0
+            ? std::sqrt(d.corner_sum_squares_px2 / static_cast<double>(d.corners_vs_truth))
+            : std::nan("");
+    auto stage = detect_s.find("detect:" + d.detector);
+    if (stage == detect_s.end() && s.primary) stage = detect_s.find("detect");
+    s.time_per_frame_s = stage != detect_s.end() && frames > 0
+                             ? stage->second / static_cast<double>(frames)
+                             : std::nan("");
+    out.push_back(s);
+  }
+  return out;
+}
+
 }  // namespace
+
+std::string series_name(const std::string& solver, const std::string& detector,
+                        const std::string& primary_detector) {
+  return detector == primary_detector ? solver : solver + "@" + detector;
+}
 
 std::vector<std::string> RunStudy::coinciding(const SolverStudy& s) const {
   std::vector<std::string> out;
@@ -565,6 +606,7 @@ RunStudy compute_study(const RunData& data, const ReportOptions& options) {
   }
   mark_coinciding(study.solvers, options.coincidence_m);
   study.stages = study_stages(data);
+  study.detectors = study_detectors(data);
   study.nonfinite_detections = data.nonfinite_detections;
   study.marker_sizes =
       study_marker_sizes(data, study.visible_markers_recorded, study.nonfinite_visible_markers);

@@ -407,6 +407,63 @@ void add_beyond_tables(const ReportInput& in, Section& sec) {
   add_event_table(in.study, sec);
 }
 
+void add_detector_tables(const ReportInput& in, Section& sec) {
+  const RunStudy& st = in.study;
+  html::Table t{"detector-rates",
+                "Detectors: markers in view found (each once per frame; in view = the whole "
+                "outline 3 px inside the image at the true pose), RMS distance of their corners "
+                "from the true corners (the layout projected through the run's camera at the "
+                "true pose from the bench read-back and the rig geometry), px, over the "
+                "detections within 10 px of it (misplaced: farther, an id decoded elsewhere), "
+                "and mean detector time per frame",
+                {"detector", "found", "in view", "rate", "corner RMS vs truth (px)",
+                 "detections with truth", "misplaced", "time per frame (s)"},
+                {}};
+  for (const DetectorStudy& d : st.detectors) {
+    const double rate = d.views_in_view > 0 ? static_cast<double>(d.views_found) /
+                                                  static_cast<double>(d.views_in_view)
+                                            : kNaN;
+    t.rows.push_back({text(d.detector + (d.primary ? " (primary)" : "")), count(d.views_found),
+                      count(d.views_in_view), number(rate, kRate), number(d.corner_rms_px, kPx),
+                      count(d.corners_vs_truth), count(d.misplaced),
+                      number(d.time_per_frame_s, kS)});
+  }
+  sec.table(std::move(t));
+
+  // The pose-marker scope: the first scope that is not "target".
+  std::string scope;
+  std::vector<std::string> solvers;  // the primary detector's series: the plain solver names
+  for (const SolverStudy& s : st.solvers) {
+    if (s.scope == "target") continue;
+    if (scope.empty()) scope = s.scope;
+    if (s.solver.find('@') == std::string::npos &&
+        std::find(solvers.begin(), solvers.end(), s.solver) == solvers.end())
+      solvers.push_back(s.solver);
+  }
+  if (scope.empty()) return;
+  std::vector<std::string> columns{"detector"};
+  for (const std::string& s : solvers)
+    columns.push_back(s + " (m)");
+  html::Table e{"detector-solver",
+                "Mean |distance error| of each solver on each detector's corners, pose marker "
+                "(scope \"" +
+                    scope +
+                    "\"), converged estimates; the full figures of each are "
+                    "the summary rows SOLVER@DETECTOR",
+                columns,
+                {}};
+  const std::string& primary = st.run.description.primary_detector;
+  for (const DetectorStudy& d : st.detectors) {
+    std::vector<html::Cell> row{text(d.detector)};
+    for (const std::string& solver : solvers) {
+      const SolverStudy* s = st.find(series_name(solver, d.detector, primary), scope);
+      row.push_back(number(s && s->used > 0 ? s->abs_error_m.mean : kNaN, kM));
+    }
+    e.rows.push_back(std::move(row));
+  }
+  sec.table(std::move(e));
+}
+
 void add_comparison(const ReportInput& in, Section& sec) {
   std::size_t worse = 0, better = 0;
   for (const ComparedFigure& f : in.comparison) {

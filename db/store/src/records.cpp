@@ -21,15 +21,16 @@ const char* to_string(PositionStatus status) {
 }
 
 bool DetectionRecord::operator==(const DetectionRecord& o) const {
-  return marker_id == o.marker_id && rotation == o.rotation && corners_px == o.corners_px &&
-         contrast == o.contrast && bits_corrected == o.bits_corrected &&
-         edge_fit_residual_px == o.edge_fit_residual_px;
+  return detector == o.detector && marker_id == o.marker_id && rotation == o.rotation &&
+         corners_px == o.corners_px && contrast == o.contrast &&
+         bits_corrected == o.bits_corrected && edge_fit_residual_px == o.edge_fit_residual_px &&
+         true_corner_rms_px == o.true_corner_rms_px;
 }
 
 bool EstimateRecord::operator==(const EstimateRecord& o) const {
-  return solver == o.solver && scope == o.scope && R_cam_target == o.R_cam_target &&
-         t_cam_target_m == o.t_cam_target_m && distance_m == o.distance_m &&
-         reprojection_error_px == o.reprojection_error_px &&
+  return solver == o.solver && detector == o.detector && scope == o.scope &&
+         R_cam_target == o.R_cam_target && t_cam_target_m == o.t_cam_target_m &&
+         distance_m == o.distance_m && reprojection_error_px == o.reprojection_error_px &&
          generalization_error_px == o.generalization_error_px && iterations == o.iterations &&
          converged == o.converged && termination == o.termination && time_us == o.time_us &&
          ambiguity_ratio == o.ambiguity_ratio;

@@ -12,7 +12,7 @@ namespace {
 //   positions by run and plan index  -> UNIQUE (run_id, plan_index)
 //   frames of a position             -> UNIQUE (position_id, frame_index)
 //   estimates by run and solver      -> positions(run_id) -> frames(position_id)
-//                                       -> estimates (frame_id, solver)
+//                                       -> estimates (frame_id, detector, solver)
 //   detections of a frame            -> detections (frame_id)
 //   bounds, visible markers of a position -> PRIMARY KEY (position_id, ...)
 //   events of a run                  -> run_events (run_id, id)
@@ -166,6 +166,22 @@ ALTER TABLE positions ADD COLUMN true_r22 REAL;
 ALTER TABLE positions ADD COLUMN true_tx_m REAL;
 ALTER TABLE positions ADD COLUMN true_ty_m REAL;
 ALTER TABLE positions ADD COLUMN true_tz_m REAL;
+)sql",
+    // 5: the detector (vision/detectors.hpp registry name) that found each
+    // detection and whose corners each estimate was solved from; a sweep
+    // runs several, and each run names its primary one (whose corners
+    // calibration and external estimators use). Rows stored before it are
+    // rig's own detector's. Each
+    // detection's RMS distance from its true corners (the layout's corners
+    // projected through the run's camera at the true pose; NULL when the
+    // true pose is unknown and in rows stored before it).
+    R"sql(
+ALTER TABLE runs ADD COLUMN primary_detector TEXT NOT NULL DEFAULT 'rig';
+ALTER TABLE detections ADD COLUMN detector TEXT NOT NULL DEFAULT 'rig';
+ALTER TABLE detections ADD COLUMN true_corner_rms_px REAL;
+ALTER TABLE estimates ADD COLUMN detector TEXT NOT NULL DEFAULT 'rig';
+DROP INDEX estimates_by_frame_solver;
+CREATE INDEX estimates_by_frame_detector_solver ON estimates (frame_id, detector, solver);
 )sql",
 };
 

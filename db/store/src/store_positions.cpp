@@ -66,6 +66,8 @@ std::int64_t Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& 
       s.insert_detection.bind(12, d.contrast)
           .bind(13, d.bits_corrected)
           .bind(14, d.edge_fit_residual_px)
+          .bind(15, d.detector)
+          .bind(16, d.true_corner_rms_px)
           .run();
     }
     for (const EstimateRecord& e : f.estimates) {
@@ -82,6 +84,7 @@ std::int64_t Store::Impl::write_rows(std::int64_t run_id, const PositionRecord& 
           .bind(21, e.termination)
           .bind(22, e.time_us)
           .bind(23, e.ambiguity_ratio)
+          .bind(24, e.detector)
           .run();
     }
   }
@@ -238,7 +241,7 @@ class PositionDetailsReader {
 constexpr const char* kEstimateColumns =
     "e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, e.r12, e.r20, e.r21, e.r22, e.tx_m, "
     "e.ty_m, e.tz_m, e.distance_m, e.reprojection_error_px, e.generalization_error_px, "
-    "e.iterations, e.converged, e.termination, e.time_us, e.ambiguity_ratio";
+    "e.iterations, e.converged, e.termination, e.time_us, e.ambiguity_ratio, e.detector";
 
 // Reads kEstimateColumns starting at column `first`.
 EstimateRecord read_estimate(const sqlite::Statement& row, int first) {
@@ -257,6 +260,7 @@ EstimateRecord read_estimate(const sqlite::Statement& row, int first) {
   e.termination = row.get_text(first + 19);
   e.time_us = row.get_double(first + 20);
   e.ambiguity_ratio = row.get_optional_double(first + 21);
+  e.detector = row.get_text(first + 22);
   return e;
 }
 
@@ -305,7 +309,8 @@ PositionRecord Store::position(std::int64_t run_id, std::int64_t plan_index) con
     sqlite::Statement detections(
         c,
         "SELECT marker_id, rotation, a_x_px, a_y_px, b_x_px, b_y_px, c_x_px, c_y_px, d_x_px, "
-        "d_y_px, contrast, bits_corrected, edge_fit_residual_px FROM detections "
+        "d_y_px, contrast, bits_corrected, edge_fit_residual_px, detector, true_corner_rms_px "
+        "FROM detections "
         "WHERE frame_id = ?1 ORDER BY id");
     sqlite::Statement estimates(c, std::string("SELECT ") + kEstimateColumns +
                                        " FROM estimates e WHERE e.frame_id = ?1 ORDER BY e.id");
@@ -329,6 +334,8 @@ PositionRecord Store::position(std::int64_t run_id, std::int64_t plan_index) con
         d.contrast = detections.get_double(10);
         d.bits_corrected = detections.get_int(11);
         d.edge_fit_residual_px = detections.get_double(12);
+        d.detector = detections.get_text(13);
+        d.true_corner_rms_px = detections.get_optional_double(14);
         f.detections.push_back(d);
       }
       detections.reset();

@@ -98,15 +98,17 @@ void Store::Impl::prepare_writers() {
   insert_detection = sqlite::Statement(
       connection,
       "INSERT INTO detections (frame_id, marker_id, rotation, a_x_px, a_y_px, b_x_px, b_y_px, "
-      "c_x_px, c_y_px, d_x_px, d_y_px, contrast, bits_corrected, edge_fit_residual_px) "
-      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14)",
+      "c_x_px, c_y_px, d_x_px, d_y_px, contrast, bits_corrected, edge_fit_residual_px, detector, "
+      "true_corner_rms_px) "
+      "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16)",
       true);
   insert_estimate = sqlite::Statement(
       connection,
       "INSERT INTO estimates (frame_id, solver, scope, r00, r01, r02, r10, r11, r12, r20, r21, "
       "r22, tx_m, ty_m, tz_m, distance_m, reprojection_error_px, generalization_error_px, "
-      "iterations, converged, termination, time_us, ambiguity_ratio) VALUES (?1, ?2, ?3, ?4, "
-      "?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, ?22, ?23)",
+      "iterations, converged, termination, time_us, ambiguity_ratio, detector) VALUES (?1, ?2, "
+      "?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19, ?20, ?21, "
+      "?22, ?23, ?24)",
       true);
 }
 
@@ -150,14 +152,15 @@ std::int64_t Store::start_run(RunDescription d) {
   sqlite::Statement insert(
       impl_->connection,
       std::string("INSERT INTO runs (started_at, status, config_json, plan_json, plan_size, "
-                  "software_version, library_versions_json, host) VALUES (") +
-          kNow + ", 'running', ?1, ?2, ?3, ?4, ?5, ?6)");
+                  "software_version, library_versions_json, host, primary_detector) VALUES (") +
+          kNow + ", 'running', ?1, ?2, ?3, ?4, ?5, ?6, ?7)");
   insert.bind(1, d.config_json)
       .bind(2, d.plan_json)
       .bind(3, d.plan_size)
       .bind(4, d.software_version)
       .bind(5, d.library_versions_json)
       .bind(6, d.host)
+      .bind(7, d.primary_detector)
       .run();
   const std::int64_t run_id = impl_->connection.last_insert_rowid();
   sqlite::Statement insert_file(
@@ -275,8 +278,8 @@ std::vector<Run> read_runs(sqlite::Connection& connection, std::optional<std::in
   sqlite::Statement select(
       connection,
       std::string("SELECT id, started_at, ended_at, status, status_reason, config_json, "
-                  "plan_json, plan_size, software_version, library_versions_json, host "
-                  "FROM runs ") +
+                  "plan_json, plan_size, software_version, library_versions_json, host, "
+                  "primary_detector FROM runs ") +
           (only ? "WHERE id = ?1 " : "") + "ORDER BY id");
   if (only) select.bind(1, *only);
   sqlite::Statement files(connection,
@@ -299,6 +302,7 @@ std::vector<Run> read_runs(sqlite::Connection& connection, std::optional<std::in
     d.software_version = select.get_text(8);
     d.library_versions_json = select.get_text(9);
     d.host = select.get_text(10);
+    d.primary_detector = select.get_text(11);
     files.bind(1, run.id);
     while (files.step()) {
       const std::string role = files.get_text(0);

@@ -42,10 +42,12 @@ void read_stored_files(const db::store::Run& run, CalibrationProblem* p) {
   p->nominal_geometry = vision::RigGeometry::load(rig);
 }
 
-void add_position(const db::store::PositionRecord& position, CalibrationProblem* p) {
+// The corners of the run's primary detector (RunDescription::primary_detector).
+void add_position(const db::store::PositionRecord& position, const std::string& detector,
+                  CalibrationProblem* p) {
   for (const db::store::FrameRecord& frame : position.frames)
     for (const db::store::DetectionRecord& det : frame.detections) {
-      if (!p->target.has_marker(det.marker_id)) continue;
+      if (det.detector != detector || !p->target.has_marker(det.marker_id)) continue;
       const std::array<Eigen::Vector3d, 4> corners = p->target.corners_m(det.marker_id);
       for (int c = 0; c < 4; ++c) {
         const Eigen::Vector2d px(det.corners_px[static_cast<std::size_t>(2 * c)],
@@ -80,7 +82,7 @@ CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64
     if (position.status != db::store::PositionStatus::kOk || !position.measured_x_mm ||
         !position.measured_y_mm)
       continue;
-    add_position(position, &p);
+    add_position(position, run.description.primary_detector, &p);
   }
   if (p.corners.empty())
     throw CalibrationInputError(p.source + ": the run has no detections of the layout's markers " +

@@ -1,13 +1,22 @@
-// rig detect IMAGE...: the fiducials in each image, and every pose solver's
-// estimate from them, on the pose marker alone and on the whole target.
+// rig detect IMAGE...: the fiducials each detector (vision/detectors.hpp) finds
+// in each image, and every pose solver's estimate from each detector's
+// corners, on the pose marker alone and on the whole target. Ids outside the
+// target layout are flagged; the detectors are those that decode the
+// target's marker family (--detector to choose).
 //
 // --json prints one JSON object per image, one per line (a single image gives
 // a single JSON document). Its shape is public:
 //   {"image": PATH,
-//    "detections": [{"id", "rotation", "corners": [[x, y] x 4], "quality":
+//    "detector": NAME, "detections": [...], "estimates": [...]   (the primary detector's)
+//    "detectors": [{"detector": NAME, "detections": [...], "estimates": [...]}, ...]}
+//   detections: [{"id", "rotation", "in_target", "corners": [[x, y] x 4], "quality":
 //                    {"contrast", "bits_corrected", "edge_fit_residual_px"}}],
-//    "estimates": [{"solver", "scope", "R", "t", "distance_m",
-//                   "reprojection_error_px", "converged", "ambiguity_ratio", ...}]}
+//   estimates: [{"solver", "scope", "R", "t", "distance_m",
+//                   "reprojection_error_px", "converged", "ambiguity_ratio", ...}]
+// The primary detector is the first of "detectors": rig's when it decodes the
+// family and is chosen. "in_target" says whether the id is a marker of the
+// layout (only those are solved on); quality fields a detector does not
+// measure are 0.
 // Corners are distorted pixels in OpenCV's convention (pixel centres at
 // integer coordinates), in the order A, B, C, D of the target layout. "scope"
 // is the pose marker's id (its four corners alone) or "target" (every
@@ -15,6 +24,7 @@
 // are T_cam_target (metres); "ambiguity_ratio" is null where a solver does
 // not define it. An image that cannot be used gives {"image", "error",
 // "detections": [], "estimates": []}.
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -26,7 +36,9 @@
 #include "estimate_json.hpp"
 #include "vision/detector.hpp"
 #include "vision/detector_image.hpp"
+#include "vision/detectors.hpp"
 #include "vision/frame_measurement.hpp"
+#include "vision/marker_family.hpp"
 #include "vision/target.hpp"
 
 namespace rig::cli {
@@ -36,15 +48,17 @@ struct Options {
   std::vector<std::string> images;
   std::string camera_file;
   std::string target_file;
+  std::vector<std::string> detectors;
   bool json = false;
 };
 
-nlohmann::json detection_to_json(const vision::Detection& d) {
+nlohmann::json detection_to_json(const vision::Detection& d, const vision::Target& target) {
   nlohmann::json corners = nlohmann::json::array();
   for (const auto& c : d.corners_px)
     corners.push_back({c.x(), c.y()});
   return {{"id", d.id},
           {"rotation", d.rotation},
+          {"in_target", target.has_marker(d.id)},
           {"corners", corners},
           {"quality",
            {{"contrast", d.quality.contrast},
@@ -58,11 +72,13 @@ nlohmann::json scope_json(const std::string& scope) {
   return scope == "target" ? nlohmann::json(scope) : nlohmann::json(std::stoi(scope));
 }
 
-void print_text(const std::string& image, const vision::FrameMeasurement& m) {
-  std::printf("%s: %zu marker%s\n", image.c_str(), m.detections.size(),
-              m.detections.size() == 1 ? "" : "s");
+void print_text(const std::string& image, const vision::DetectorMeasurement& m,
+                const vision::Target& target) {
+  std::printf("%s: %zu marker%s (detector %s)\n", image.c_str(), m.detections.size(),
+              m.detections.size() == 1 ? "" : "s", m.detector.c_str());
   for (const auto& d : m.detections) {
-    std::printf("  id %2d rot %d  corners", d.id, d.rotation);
+    std::printf("  id %2d%s rot %d  corners", d.id,
+                target.has_marker(d.id) ? "" : " (not in the target layout)", d.rotation);
     for (const auto& c : d.corners_px)
       std::printf(" (%.3f, %.3f)", c.x(), c.y());
     std::printf("  contrast %.0f  bits corrected %d  edge residual %.3f px\n", d.quality.contrast,
@@ -93,6 +109,25 @@ void print_text(const std::string& image, const vision::FrameMeasurement& m) {
 
 // Returns false when the image could not be used (the error is printed).
 // `calibration` names the calibration in messages.
+// One detector's detections and estimates as rig detect's JSON gives them.
+nlohmann::json measurement_json(const vision::DetectorMeasurement& m,
+                                const vision::Target& target) {
+  nlohmann::json out = {{"detector", m.detector},
+                        {"detections", nlohmann::json::array()},
+                        {"estimates", nlohmann::json::array()}};
+  for (const auto& d : m.detections)
+    out["detections"].push_back(detection_to_json(d, target));
+  for (const auto& error : m.scope_errors)
+    out["estimates"].push_back({{"scope", scope_json(error.scope)}, {"error", error.message}});
+  for (const auto& s : m.estimates) {
+    nlohmann::json j = estimate_to_json(s.estimate);
+    j["scope"] = scope_json(s.scope);
+    if (s.estimate.applicable() && !j.contains("ambiguity_ratio")) j["ambiguity_ratio"] = nullptr;
+    out["estimates"].push_back(j);
+  }
+  return out;
+}
+
 bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer,
                 const std::string& calibration, bool json) {
   vision::FrameMeasurement m;
@@ -119,23 +154,17 @@ bool detect_one(const std::string& path, const vision::FrameMeasurer& measurer,
                 << std::endl;
     return false;
   }
+  const vision::Target& target = measurer.target();
   if (!json) {
-    print_text(path, m);
+    for (const vision::DetectorMeasurement& dm : m.detectors)
+      print_text(path, dm, target);
     return true;
   }
-  nlohmann::json out = {{"image", path},
-                        {"detections", nlohmann::json::array()},
-                        {"estimates", nlohmann::json::array()}};
-  for (const auto& d : m.detections)
-    out["detections"].push_back(detection_to_json(d));
-  for (const auto& error : m.scope_errors)
-    out["estimates"].push_back({{"scope", scope_json(error.scope)}, {"error", error.message}});
-  for (const auto& s : m.estimates) {
-    nlohmann::json j = estimate_to_json(s.estimate);
-    j["scope"] = scope_json(s.scope);
-    if (s.estimate.applicable() && !j.contains("ambiguity_ratio")) j["ambiguity_ratio"] = nullptr;
-    out["estimates"].push_back(j);
-  }
+  nlohmann::json out = measurement_json(m.primary(), target);
+  out["image"] = path;
+  out["detectors"] = nlohmann::json::array();
+  for (const vision::DetectorMeasurement& dm : m.detectors)
+    out["detectors"].push_back(measurement_json(dm, target));
   std::cout << out.dump() << std::endl;
   return true;
 }
@@ -145,12 +174,27 @@ int run_detect(const Options& o) {
       o.camera_file.empty() ? vision::Camera::paper_default() : vision::Camera::load(o.camera_file);
   const vision::Target target =
       o.target_file.empty() ? vision::Target::paper_default() : vision::Target::load(o.target_file);
-  const vision::Codebook codebook;
+  const vision::MarkerFamily& family = vision::MarkerFamily::named(target.family);
   for (const auto& m : target.markers)
-    if (m.id < 0 || static_cast<size_t>(m.id) >= codebook.size())
-      throw BadInput("target marker id " + std::to_string(m.id) +
-                     " is not in the codebook (ids 0-" + std::to_string(codebook.size() - 1) + ")");
-  const vision::FrameMeasurer measurer(camera, target);
+    if (!family.has_id(m.id))
+      throw BadInput("target marker id " + std::to_string(m.id) + " is not in its family " +
+                     family.name() + " (ids 0-" + std::to_string(family.size() - 1) + ")");
+  std::vector<std::string> detectors = o.detectors;
+  if (detectors.empty()) detectors = vision::detectors_for_family(target.family);
+  for (const std::string& d : detectors)
+    if (!vision::detector_reads(d, target.family)) {
+      const bool known = std::find(vision::detector_names().begin(), vision::detector_names().end(),
+                                   d) != vision::detector_names().end();
+      std::string able;
+      for (const std::string& a : vision::detectors_for_family(target.family))
+        able += (able.empty() ? "" : ", ") + a;
+      throw BadInput("--detector " + d + ": " +
+                     (known ? "does not decode the target's family " + target.family
+                            : "no such detector (" + vision::detector_names_text() + ")") +
+                     "; expected one of the detectors that decode " + target.family + ": " +
+                     (able.empty() ? std::string("none") : able));
+    }
+  const vision::FrameMeasurer measurer(camera, target, {}, detectors);
   const std::string calibration = o.camera_file.empty() ? "the built-in paper camera (no --camera)"
                                                         : "calibration '" + o.camera_file + "'";
   bool all_ok = true;
@@ -174,6 +218,10 @@ void add_detect_command(CLI::App& app, ExitStatus& status) {
   cmd->add_option(
       "--target", o->target_file,
       "Target layout (TOML, see config/targets/paper.toml); default: the paper's sheet");
+  cmd->add_option("--detector", o->detectors,
+                  "A detector to run (repeatable): rig, aruco:none, aruco:subpix, aruco:contour, "
+                  "aruco:apriltag, apriltag:d1, apriltag:d2; default: every one that decodes the "
+                  "target's marker family");
   cmd->add_flag("--json", o->json,
                 "Print one JSON object per image, one per line: {\"image\", \"detections\", "
                 "\"estimates\"}");

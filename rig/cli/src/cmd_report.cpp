@@ -12,6 +12,7 @@
 // existing file); 3 with --fail-on-regression: written, and some solver got
 // significantly worse than the baseline (for CI of products that depend on
 // the solvers).
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -118,8 +119,9 @@ std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord&
   p.height = picture.rows;
   p.scale = scale;
   const std::size_t n = f.detections.size();
-  p.drawn = std::to_string(n) + (n == 1 ? " marker" : " markers") +
-            " detected: corners A-D (dots) and ids in orange";
+  const std::string detector = n > 0 ? f.detections.front().detector : "";
+  p.drawn = std::to_string(n) + (n == 1 ? " marker" : " markers") + " detected" +
+            (detector.empty() ? "" : " by " + detector) + ": corners A-D (dots) and ids in orange";
   return p;
 }
 
@@ -138,7 +140,13 @@ std::vector<db::report::FramePicture> draw_pictures(const db::report::Report& re
   for (const db::report::FrameToShow& w : wanted) {
     const db::store::PositionRecord p = store.position(report.study().run.id, w.plan_index);
     if (w.frame_index < 0 || static_cast<std::size_t>(w.frame_index) >= p.frames.size()) continue;
-    const db::store::FrameRecord& f = p.frames[static_cast<std::size_t>(w.frame_index)];
+    // The run's primary detector's detections only (one outline per marker).
+    db::store::FrameRecord f = p.frames[static_cast<std::size_t>(w.frame_index)];
+    const std::string& primary = report.study().run.description.primary_detector;
+    f.detections.erase(
+        std::remove_if(f.detections.begin(), f.detections.end(),
+                       [&](const db::store::DetectionRecord& d) { return d.detector != primary; }),
+        f.detections.end());
     std::string reason;
     const std::optional<std::string> bytes = saved_frame(f, reason);
     std::optional<db::report::FramePicture> picture;

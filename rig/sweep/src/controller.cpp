@@ -136,7 +136,7 @@ class PositionMeasurer {
         camera_(camera),
         log_(log),
         faults_(faults),
-        measurer_(config.camera, config.target),
+        measurer_(config.camera, config.target, {}, config.detectors),
         externals_(config.estimators, measurer_.camera(), measurer_.target()),
         frames_folder_(std::move(frames_folder)) {}
 
@@ -172,8 +172,8 @@ class PositionMeasurer {
     rec.commanded_y_mm = p.y_mm;
     try {
       const std::vector<vision::Frame> frames = settle_and_capture(index, p, rec);
-      add_truth(rec);
-      measure_frames(index, frames, rec);
+      const vision::Pose truth = add_truth(rec);
+      measure_frames(index, frames, truth, rec);
       rec.status = db::store::PositionStatus::kOk;
     } catch (const PositionFailure& f) {
       log_.fault(f.kind, f.reason, "position_failed", index);
@@ -370,7 +370,8 @@ class PositionMeasurer {
   }
 
   // The truth at the read-back (docs/target-and-geometry.md).
-  void add_truth(db::store::PositionRecord& rec) const {
+  // Returns the true T_cam_target.
+  vision::Pose add_truth(db::store::PositionRecord& rec) const {
     const GroundTruth truth = ground_truth_at(config_.geometry, config_.camera, config_.target,
                                               *rec.measured_x_mm, *rec.measured_y_mm);
     rec.true_distance_m = truth.distance_m;
@@ -378,27 +379,32 @@ class PositionMeasurer {
     rec.visible_markers = truth.visible_markers;
     rec.distance_bounds = truth.distance_bounds;
     rec.true_pose = stored_true_pose(truth.T_cam_target);
+    return truth.T_cam_target;
   }
 
-  // Detection, every solver and every external estimator on each frame, with
-  // the detect and solve stage times.
+  // Every detector, every solver on each detector's corners and every
+  // external estimator on each frame, with the stage times: "detect" and
+  // "solve:SOLVER" of the primary detector (the external estimators' on its
+  // corners), "detect:DETECTOR" of each detector.
   void measure_frames(std::int64_t index, const std::vector<vision::Frame>& frames,
-                      db::store::PositionRecord& rec) {
-    double detect_s = 0;
+                      const vision::Pose& truth, db::store::PositionRecord& rec) {
+    std::map<std::string, double> detect_s;
     std::map<std::string, double> solve_s;
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const vision::FrameMeasurement m = measurer_.measure(frames[k].image);
       // Detected corners no solver can take (e.g. outside the lens model's
       // invertible region): the scope has no estimates; say why.
-      for (const auto& error : m.scope_errors)
-        log_.event("detect",
-                   "frame " + std::to_string(k) + ", scope " + error.scope +
-                       ": no estimates: " + error.message,
-                   index);
-      detect_s += m.detect_s;
-      for (const auto& [name, s] : m.solve_s)
+      for (const vision::DetectorMeasurement& dm : m.detectors) {
+        for (const auto& error : dm.scope_errors)
+          log_.event("detect",
+                     "frame " + std::to_string(k) + ", detector " + dm.detector + ", scope " +
+                         error.scope + ": no estimates: " + error.message,
+                     index);
+        detect_s[dm.detector] += dm.detect_s;
+      }
+      for (const auto& [name, s] : m.primary().solve_s)
         solve_s[name] += s;
-      rec.frames.push_back(frame_record(index, static_cast<int>(k), frames[k], m));
+      rec.frames.push_back(frame_record(index, static_cast<int>(k), frames[k], m, truth));
       try {
         externals_.measure(index, frames[k].image, rec.frames.back().image_path, m,
                            rec.frames.back(), solve_s, log_);
@@ -406,7 +412,9 @@ class PositionMeasurer {
         throw RunEnd{db::store::RunStatus::kFailed, e.what()};
       }
     }
-    rec.stage_times.push_back({"detect", detect_s});
+    rec.stage_times.push_back({"detect", detect_s[measurer_.detector_names().front()]});
+    for (const std::string& name : measurer_.detector_names())
+      rec.stage_times.push_back({"detect:" + name, detect_s[name]});
     for (const auto& name : solver_names())
       rec.stage_times.push_back({"solve:" + name, solve_s[name]});
   }
@@ -414,8 +422,10 @@ class PositionMeasurer {
   // What the run stores of frame k: the measurement, the frame's times and
   // source, and the saved PNG when frames are saved.
   db::store::FrameRecord frame_record(std::int64_t index, int k, const vision::Frame& frame,
-                                      const vision::FrameMeasurement& m) {
-    db::store::FrameRecord f = to_frame_record(m, k);
+                                      const vision::FrameMeasurement& m,
+                                      const vision::Pose& truth) {
+    db::store::FrameRecord f =
+        to_frame_record(m, k, TrueCorners{config_.camera, config_.target, truth});
     if (frame.camera_timestamp_ns != 0)
       f.camera_timestamp_ns = static_cast<std::int64_t>(frame.camera_timestamp_ns);
     f.host_timestamp_ns = ns_since_epoch(frame.host_time);

@@ -135,7 +135,10 @@ void ExternalEstimates::measure(std::int64_t index, const cv::Mat& image,
                                        [](const auto& e) { return !e->disabled(); });
   estimator::FrameRequest request;
   if (any_enabled) request.image_path = saved_png ? *saved_png : frame_folder_.write(image);
-  request.detections = &m.detections;
+  // The primary detector's corners: rig's, or the first detector that reads
+  // the target's family.
+  const vision::DetectorMeasurement& primary = m.primary();
+  request.detections = &primary.detections;
   for (auto& e : estimators_) {
     const std::string solver = e->spec().solver_name();
     const auto start = std::chrono::steady_clock::now();
@@ -145,14 +148,19 @@ void ExternalEstimates::measure(std::int64_t index, const cv::Mat& image,
     if (r.failure) {
       frame.estimates.push_back(external_failure_record(
           solver, std::string("estimator_") + estimator::to_string(r.failure->kind)));
+      frame.estimates.back().detector = primary.detector;
       continue;
     }
-    if (r.poses.empty())
+    if (r.poses.empty()) {
       frame.estimates.push_back(external_failure_record(solver, "estimator_no_pose"));
-    for (const auto& pose : r.poses)
+      frame.estimates.back().detector = primary.detector;
+    }
+    for (const auto& pose : r.poses) {
       frame.estimates.push_back(
-          external_estimate_record(solver, pose, camera_, target_, m.detections,
+          external_estimate_record(solver, pose, camera_, target_, primary.detections,
                                    r.estimator_time_us.value_or(r.round_trip_us)));
+      frame.estimates.back().detector = primary.detector;
+    }
   }
 }
 

@@ -7,8 +7,28 @@
 namespace rig::sweep {
 namespace {
 
-db::store::DetectionRecord to_record(const vision::Detection& d) {
+// RMS distance, px, of a detection's corners from the layout's corners
+// projected through `camera` at the true pose; none for a marker not in the
+// layout or a corner behind the camera.
+std::optional<double> true_corner_rms_px(const vision::Detection& d, const TrueCorners& truth) {
+  if (!truth.target.has_marker(d.id)) return std::nullopt;
+  const auto corners_m = truth.target.corners_m(d.id);
+  double sum_sq = 0;
+  for (std::size_t k = 0; k < 4; ++k) {
+    const Eigen::Vector3d p_cam = truth.T_cam_target.R * corners_m[k] + truth.T_cam_target.t;
+    if (!(p_cam.z() > 0)) return std::nullopt;
+    sum_sq += (truth.camera.project(p_cam) - d.corners_px[k]).squaredNorm();
+  }
+  const double rms = std::sqrt(sum_sq / 4);
+  if (!std::isfinite(rms)) return std::nullopt;
+  return rms;
+}
+
+db::store::DetectionRecord to_record(const std::string& detector, const vision::Detection& d,
+                                     const std::optional<TrueCorners>& truth) {
   db::store::DetectionRecord r;
+  r.detector = detector;
+  if (truth) r.true_corner_rms_px = true_corner_rms_px(d, *truth);
   r.marker_id = d.id;
   r.rotation = d.rotation;
   for (int k = 0; k < 4; ++k) {
@@ -21,10 +41,11 @@ db::store::DetectionRecord to_record(const vision::Detection& d) {
   return r;
 }
 
-db::store::EstimateRecord to_record(const vision::ScopeEstimate& s) {
+db::store::EstimateRecord to_record(const std::string& detector, const vision::ScopeEstimate& s) {
   const vision::Estimate& e = s.estimate;
   db::store::EstimateRecord r;
   r.solver = e.solver;
+  r.detector = detector;
   r.scope = s.scope;
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j)
@@ -50,13 +71,16 @@ db::store::EstimateRecord to_record(const vision::ScopeEstimate& s) {
 
 }  // namespace
 
-db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& m, int frame_index) {
+db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& m, int frame_index,
+                                       const std::optional<TrueCorners>& truth) {
   db::store::FrameRecord f;
   f.index = frame_index;
-  for (const auto& d : m.detections)
-    f.detections.push_back(to_record(d));
-  for (const auto& e : m.estimates)
-    f.estimates.push_back(to_record(e));
+  for (const vision::DetectorMeasurement& dm : m.detectors) {
+    for (const auto& d : dm.detections)
+      f.detections.push_back(to_record(dm.detector, d, truth));
+    for (const auto& e : dm.estimates)
+      f.estimates.push_back(to_record(dm.detector, e));
+  }
   return f;
 }
 

@@ -9,7 +9,11 @@ namespace rig::sweep {
 
 RunLog::RunLog(db::store::Store& store, std::int64_t run_id, std::int64_t plan_size,
                telemetry::TelemetryPublisher* telemetry)
-    : store_(store), run_id_(run_id), plan_size_(plan_size), telemetry_(telemetry) {}
+    : store_(store),
+      run_id_(run_id),
+      plan_size_(plan_size),
+      primary_detector_(store.run(run_id).description.primary_detector),
+      telemetry_(telemetry) {}
 
 void RunLog::set_observer(std::function<void(const nlohmann::json&)> observer) {
   observer_ = std::move(observer);
@@ -82,7 +86,8 @@ std::int64_t RunLog::stored() const {
 
 nlohmann::json RunLog::position_message(const db::store::PositionRecord& position) const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return rig::sweep::position_message(position, run_id_, stored_, plan_size_, elapsed_s_);
+  return rig::sweep::position_message(position, primary_detector_, run_id_, stored_, plan_size_,
+                                      elapsed_s_);
 }
 
 double RunLog::eta_s() const {

@@ -66,6 +66,7 @@ class RunLog {
   db::store::Store& store_;
   const std::int64_t run_id_;
   const std::int64_t plan_size_;
+  const std::string primary_detector_;  // the run's, whose estimates telemetry shows
   telemetry::TelemetryPublisher* telemetry_;
   bool telemetry_failed_ = false;
   std::function<void(const nlohmann::json&)> observer_;

@@ -70,6 +70,7 @@ db::store::RunDescription describe_run(const SweepConfig& config, const SweepPla
   d.software_version = RIG_VERSION;
   d.library_versions_json = library_versions().dump();
   d.host = host_name();
+  d.primary_detector = config.detectors.front();  // registry order (sweep_config.hpp)
   return d;
 }
 

@@ -16,6 +16,7 @@
 #include "motion/bench_url.hpp"
 #include "rig/sweep/pose_json.hpp"
 #include "rig/telemetry/telemetry.hpp"
+#include "vision/detectors.hpp"
 
 namespace rig::sweep {
 namespace {
@@ -224,6 +225,42 @@ void read_target(Table target, SweepConfig* c) {
   c->target = load_named(target, "layout", "a target layout (vision/target)",
                          [&] { return vision::Target::load(c->target_layout_path); });
   target.reject_unknown();
+}
+
+// [detect] detectors: each a detector of vision's registry that decodes the
+// target's family, once; absent = every such detector. A family no detector
+// decodes is refused here, before the bench moves.
+void read_detect(Table detect, const Table& target, SweepConfig* c) {
+  const std::string& family = c->target.family;
+  const std::vector<std::string> able = vision::detectors_for_family(family);
+  if (able.empty()) {
+    target.fail("layout",
+                "a target whose marker family a detector decodes (" +
+                    vision::detector_names_text() + " read the families of vision/detectors.hpp)",
+                "marker family \"" + family + "\" is read by no detector");
+  }
+  c->detectors = able;
+  if (!detect.exists() || !detect.has("detectors")) {
+    if (detect.exists()) detect.reject_unknown();
+    return;
+  }
+  std::string able_text;
+  for (const std::string& d : able)
+    able_text += (able_text.empty() ? "\"" : ", \"") + d + "\"";
+  const std::string expected =
+      "detectors that decode the target's family " + family + ": " + able_text;
+  c->detectors = detect.strings("detectors", 1, able.size(), expected);
+  std::set<std::string> seen;
+  for (const std::string& d : c->detectors) {
+    if (!vision::detector_reads(d, family))
+      detect.fail("detectors", expected, "\"" + d + "\" does not decode it");
+    if (!seen.insert(d).second) detect.fail("detectors", expected, "\"" + d + "\" twice");
+  }
+  detect.reject_unknown();
+  std::vector<std::string> ordered;  // the measurer's order: the primary first
+  for (const std::string& d : able)
+    if (seen.count(d) != 0) ordered.push_back(d);
+  c->detectors = ordered;
 }
 
 // The geometry from a rig file or from inline [rig.camera_mount] / [rig.target].
@@ -485,6 +522,7 @@ nlohmann::json SweepConfig::to_json() const {
         {"toml", rig_geometry_text},
         {"T_carriage_cam", pose_to_json(geometry.T_carriage_cam, "t_m")},
         {"T_bench_target", pose_to_json(geometry.T_bench_target, "t_m")}}},
+      {"detect", {{"detectors", detectors}}},
       {"database", {{"path", database_path}, {"durable_commits", durable_commits}}},
       {"telemetry",
        {{"publish", telemetry.publish},
@@ -502,20 +540,22 @@ SweepConfig load_sweep_config(const std::string& path) {
   c.sweep_file_text = file.text();
   Table root = file.root();
   // Unknown tables first: a misspelt [setle] must not let its defaults be checked.
-  for (const char* name : {"plan", "capture", "bench", "settle", "faults", "target", "rig",
-                           "database", "telemetry", "estimator"}) {
+  for (const char* name : {"plan", "capture", "bench", "settle", "faults", "target", "detect",
+                           "rig", "database", "telemetry", "estimator"}) {
     root.ignore(name);
   }
   root.reject_unknown(
-      "one of the tables [plan], [capture], [bench], [settle], [faults], [target], [rig], "
-      "[database], [telemetry], [[estimator]]");
+      "one of the tables [plan], [capture], [bench], [settle], [faults], [target], [detect], "
+      "[rig], [database], [telemetry], [[estimator]]");
   read_bench(root.table("bench"), &c);
   c.plan = read_plan(root.table("plan"), c.bench_profile.soft_limits);
   read_capture(root.table("capture"), &c);
   const Table settle = root.optional_table("settle");
   read_settle(settle, &c);
   read_faults(root.optional_table("faults"), &c);
-  read_target(root.table("target"), &c);
+  const Table target = root.table("target");
+  read_target(target, &c);
+  read_detect(root.optional_table("detect"), target, &c);
   Table rig = root.table("rig");
   read_rig(rig, &c);
   read_database(root.table("database"), &c);

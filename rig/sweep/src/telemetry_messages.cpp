@@ -8,8 +8,9 @@
 
 namespace rig::sweep {
 
-nlohmann::json position_message(const db::store::PositionRecord& rec, std::int64_t run_id,
-                                std::int64_t stored, std::int64_t plan_size, double elapsed_s) {
+nlohmann::json position_message(const db::store::PositionRecord& rec, const std::string& detector,
+                                std::int64_t run_id, std::int64_t stored, std::int64_t plan_size,
+                                double elapsed_s) {
   nlohmann::json estimates = nlohmann::json::array();
   // Means over the frames, per solver and scope.
   struct Sum {
@@ -22,8 +23,11 @@ nlohmann::json position_message(const db::store::PositionRecord& rec, std::int64
   std::vector<std::pair<std::string, std::string>> order;
   std::size_t markers = 0;
   for (const auto& f : rec.frames) {
-    markers = std::max(markers, f.detections.size());
+    markers = std::max(markers, static_cast<std::size_t>(std::count_if(
+                                    f.detections.begin(), f.detections.end(),
+                                    [&](const auto& d) { return d.detector == detector; })));
     for (const auto& e : f.estimates) {
+      if (e.detector != detector) continue;
       const auto key = std::make_pair(e.solver, e.scope);
       if (!sums.count(key)) order.push_back(key);
       Sum& s = sums[key];

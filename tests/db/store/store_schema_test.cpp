@@ -138,6 +138,18 @@ void drop_true_pose_columns(RawDb& raw) {
     raw.exec(std::string("ALTER TABLE positions DROP COLUMN ") + c);
 }
 
+// Undoes migration 5 (the detector of each row, the run's primary detector,
+// the true-corner RMS): the file as schema 4 left it.
+void drop_detector_columns(RawDb& raw) {
+  raw.exec(
+      "DROP INDEX estimates_by_frame_detector_solver; "
+      "CREATE INDEX estimates_by_frame_solver ON estimates (frame_id, solver); "
+      "ALTER TABLE estimates DROP COLUMN detector; "
+      "ALTER TABLE detections DROP COLUMN detector; "
+      "ALTER TABLE detections DROP COLUMN true_corner_rms_px; "
+      "ALTER TABLE runs DROP COLUMN primary_detector");
+}
+
 // A file as schema version 1 wrote it: migration 2's additions removed from a
 // current file, with one position in it.
 std::string make_version1_file(const ScratchDir& dir) {
@@ -153,6 +165,7 @@ std::string make_version1_file(const ScratchDir& dir) {
       "DROP TABLE run_events; "
       "ALTER TABLE positions DROP COLUMN true_viewing_angle_deg; PRAGMA user_version = 1");
   drop_true_pose_columns(raw);
+  drop_detector_columns(raw);
   return path;
 }
 
@@ -192,6 +205,7 @@ TEST(StoreSchema, MigratesAVersion2FileWhoseRunsHaveNoCamera) {
     RawDb raw(path);
     raw.exec("DROP TABLE run_camera; PRAGMA user_version = 2");
     drop_true_pose_columns(raw);
+    drop_detector_columns(raw);
   }
   db::store::Store store(path);
   EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
@@ -218,6 +232,7 @@ TEST(StoreSchema, MigratesAVersion3FileWhosePositionsHaveNoTruePose) {
   {
     RawDb raw(path);
     drop_true_pose_columns(raw);
+    drop_detector_columns(raw);
     raw.exec("PRAGMA user_version = 3");
   }
   db::store::Store store(path);
@@ -230,6 +245,58 @@ TEST(StoreSchema, MigratesAVersion3FileWhosePositionsHaveNoTruePose) {
   const db::store::PositionRecord back = store.position(1, 1);
   ASSERT_TRUE(back.true_pose.has_value());
   EXPECT_EQ(back, db_test::make_position(1));
+  EXPECT_EQ(RawDb(path).text("PRAGMA integrity_check"), "ok");
+}
+
+// A version 4 file (one detector per run, rig's) keeps its detections and
+// estimates, which read as rig's detector's, its runs' primary detector is
+// rig's, and the migrated file takes rows of other detectors.
+TEST(StoreSchema, MigratesAVersion4FileWhoseRowsAreRigsDetectors) {
+  ScratchDir dir;
+  const std::string path = dir.file("v4.db");
+  {
+    db::store::Store store(path);
+    const std::int64_t run = store.start_run(db_test::make_run_description(4));
+    store.append_position(run, db_test::make_position(0));
+  }
+  {
+    RawDb raw(path);
+    drop_detector_columns(raw);
+    raw.exec("PRAGMA user_version = 4");
+  }
+  db::store::Store store(path);
+  EXPECT_EQ(RawDb(path).text("PRAGMA user_version"),
+            std::to_string(db::store::Store::kSchemaVersion));
+  EXPECT_EQ(store.run(1).description.primary_detector, "rig");
+  const db::store::PositionRecord back = store.position(1, 0);
+  EXPECT_EQ(back, db_test::make_position(0));
+  ASSERT_FALSE(back.frames.empty());
+  ASSERT_FALSE(back.frames[0].detections.empty());
+  ASSERT_FALSE(back.frames[0].estimates.empty());
+  for (const auto& f : back.frames) {
+    for (const auto& d : f.detections) {
+      EXPECT_EQ(d.detector, "rig");
+      EXPECT_FALSE(d.true_corner_rms_px.has_value());
+    }
+    for (const auto& e : f.estimates)
+      EXPECT_EQ(e.detector, "rig");
+  }
+  // Rows of another detector, with a true-corner RMS, round-trip.
+  db::store::RunDescription d = db_test::make_run_description(4);
+  d.primary_detector = "aruco:subpix";
+  const std::int64_t run = store.start_run(d);
+  db::store::PositionRecord p = db_test::make_position(0);
+  for (auto& f : p.frames) {
+    for (auto& det : f.detections) {
+      det.detector = "aruco:subpix";
+      det.true_corner_rms_px = 0.25;
+    }
+    for (auto& e : f.estimates)
+      e.detector = "aruco:subpix";
+  }
+  store.append_position(run, p);
+  EXPECT_EQ(store.position(run, 0), p);
+  EXPECT_EQ(store.run(run).description.primary_detector, "aruco:subpix");
   EXPECT_EQ(RawDb(path).text("PRAGMA integrity_check"), "ok");
 }
 

@@ -70,10 +70,10 @@ void measure_position(const vision::FrameMeasurer& calibrated, const vision::Rig
   const vision::FrameMeasurement a = calibrated.measure(image);
   const vision::FrameMeasurement b = truthful.measure(image);
   std::map<std::string, double> from_a;
-  for (const vision::ScopeEstimate& s : a.estimates)
+  for (const vision::ScopeEstimate& s : a.primary().estimates)
     if (s.scope == "0" && s.estimate.converged)
       from_a[s.estimate.solver] = s.estimate.distance_m - cal_geo.distance_m(x_mm, y_mm);
-  for (const vision::ScopeEstimate& s : b.estimates) {
+  for (const vision::ScopeEstimate& s : b.primary().estimates) {
     if (s.scope != "0" || !s.estimate.converged) continue;
     const auto it = from_a.find(s.estimate.solver);
     if (it == from_a.end()) continue;

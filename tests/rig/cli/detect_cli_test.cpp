@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <set>
 #include <sstream>
 
 #include "rig_command.hpp"
@@ -168,6 +169,58 @@ TEST_F(RigDetect, TextOutputListsTheMarkersAndTheSolvers) {
   EXPECT_NE(r.out.find(path("frame.png") + ": 4 markers"), std::string::npos) << r.out;
   for (const auto& name : vision::solver_names())
     EXPECT_NE(r.out.find(name), std::string::npos) << name;
+}
+
+}  // namespace
+
+namespace {
+
+// Every detector that decodes the target's family (rig4x4: all seven) reads
+// the frame; the JSON says which found what, and each id is checked against
+// the target layout. Every detector finds the four markers of the paper's
+// sheet at 0.5 m (tests/vision/detectors_test.cpp: every marker with 8 px of
+// white beyond it, at these distances and tilts).
+TEST_F(RigDetect, SaysWhichDetectorFoundWhatAndChecksTheIdsAgainstTheTarget) {
+  const rig_test::RigRun r = run("--json " + path("frame.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["detector"], "rig");
+  ASSERT_EQ(j["detectors"].size(), 7u);
+  for (const auto& d : j["detectors"]) {
+    const std::string name = d["detector"];
+    std::set<int> in_target;
+    for (const auto& det : d["detections"]) {
+      EXPECT_EQ(det["in_target"].get<bool>(), det["id"].get<int>() < 4) << name;
+      if (det["in_target"].get<bool>()) in_target.insert(det["id"].get<int>());
+    }
+    EXPECT_EQ(in_target, (std::set<int>{0, 1, 2, 3})) << name;
+    // libapriltag decodes rig's 16-bit codes without rig's border checks and
+    // may take a quad of code cells for a marker (p = 0.2 % a quad,
+    // vision/src/detectors_apriltag.cpp); the others find exactly the four.
+    if (name.rfind("apriltag:", 0) != 0) {
+      EXPECT_EQ(d["detections"].size(), 4u) << name;
+    }
+    EXPECT_FALSE(d["estimates"].empty()) << name;
+  }
+  const rig_test::RigRun one = run("--detector apriltag:d2 " + path("frame.png"));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  EXPECT_NE(one.out.find("4 markers (detector apriltag:d2)"), std::string::npos) << one.out;
+  EXPECT_EQ(one.out.find("detector rig)"), std::string::npos) << one.out;
+}
+
+// A detector that cannot decode the target's family is bad input (exit 2),
+// naming the detector, the family and the detectors that can.
+TEST_F(RigDetect, RefusesADetectorThatCannotReadTheTargetsFamily) {
+  std::ifstream in(std::string(RIG_SOURCE_DIR) + "/config/targets/paper.toml");
+  std::stringstream layout;
+  layout << "family = \"aruco:DICT_6X6_250\"\n" << in.rdbuf();
+  std::ofstream(path("aruco.toml")) << layout.str();
+  const rig_test::RigRun r =
+      run("--target " + path("aruco.toml") + " --detector rig " + path("frame.png"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--detector rig"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("aruco:DICT_6X6_250"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("aruco:subpix"), std::string::npos) << r.err;
 }
 
 }  // namespace

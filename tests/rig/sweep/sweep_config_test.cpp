@@ -10,12 +10,14 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "config/error.hpp"
 #include "rig/sweep/sweep_plan.hpp"
+#include "vision/detectors.hpp"
 
 namespace {
 
@@ -106,6 +108,49 @@ TEST(SweepConfigValid, TheBaseFileOfTheMalformedCasesLoads) {
       rig::sweep::load_sweep_config(write_file(dir / "sweep.toml", valid_sweep()));
   EXPECT_EQ(c.plan.size(), 10u * 3u);
   EXPECT_EQ(c.database_path, (dir / "out/run.db").string());  // relative to the sweep file
+}
+
+// ---- detectors -------------------------------------------------------------
+
+TEST(SweepConfigDetect, EveryDetectorThatReadsTheFamilyByDefaultAndTheChosenOnesInRegistryOrder) {
+  const fs::path dir = temp_dir("detect");
+  const SweepConfig all =
+      rig::sweep::load_sweep_config(write_file(dir / "all.toml", valid_sweep()));
+  EXPECT_EQ(all.detectors, vision::detectors_for_family("rig4x4"));
+  EXPECT_EQ(all.detectors.front(), "rig");
+  const SweepConfig two = rig::sweep::load_sweep_config(write_file(
+      dir / "two.toml", valid_sweep() + "\n[detect]\ndetectors = [\"apriltag:d2\", \"rig\"]\n"));
+  // The measurer's order, whatever the file's: the primary (rig's) first.
+  EXPECT_EQ(two.detectors, (std::vector<std::string>{"rig", "apriltag:d2"}));
+  EXPECT_EQ(two.to_json()["detect"]["detectors"], nlohmann::json({"rig", "apriltag:d2"}));
+}
+
+// A target whose family none of the chosen detectors decodes is refused when
+// the file is read, before anything connects to the bench, naming the key,
+// the detector and those that would do.
+TEST(SweepConfigDetect, ADetectorThatCannotReadTheTargetsFamilyIsRefusedNamingWhoCan) {
+  const fs::path dir = temp_dir("detect-family");
+  std::ifstream in(kConfig + "/targets/paper.toml");
+  const std::string layout((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  write_file(dir / "aruco.toml", "family = \"aruco:DICT_6X6_250\"\n" + layout);
+  const std::string base =
+      edit(valid_sweep(), kConfig + "/targets/paper.toml", (dir / "aruco.toml").string());
+  const std::string error =
+      load_error(write_file(dir / "rig.toml", base + "\n[detect]\ndetectors = [\"rig\"]\n"));
+  EXPECT_NE(error.find("detect.detectors"), std::string::npos) << error;
+  EXPECT_NE(error.find("\"rig\" does not decode it"), std::string::npos) << error;
+  EXPECT_NE(error.find("aruco:DICT_6X6_250"), std::string::npos) << error;
+  EXPECT_NE(error.find("\"aruco:subpix\""), std::string::npos) << error;  // who can
+  const std::string unknown = load_error(
+      write_file(dir / "unknown.toml", base + "\n[detect]\ndetectors = [\"aruco:fast\"]\n"));
+  EXPECT_NE(unknown.find("\"aruco:fast\" does not decode it"), std::string::npos) << unknown;
+  const std::string twice = load_error(write_file(
+      dir / "twice.toml", base + "\n[detect]\ndetectors = [\"aruco:none\", \"aruco:none\"]\n"));
+  EXPECT_NE(twice.find("twice"), std::string::npos) << twice;
+  // Without [detect], the family's own detectors: cv::aruco's four.
+  const SweepConfig c = rig::sweep::load_sweep_config(write_file(dir / "default.toml", base));
+  EXPECT_EQ(c.detectors, (std::vector<std::string>{"aruco:none", "aruco:subpix", "aruco:contour",
+                                                   "aruco:apriltag"}));
 }
 
 // ---- shipped sweep files --------------------------------------------------
@@ -385,7 +430,8 @@ INSTANTIATE_TEST_SUITE_P(
                     kCaptureKeys},
         BadCase{"unknown_table", "[settle]", "[setle]",
                 "setle = { dwell_ms = 0 }: unknown key (misspelt?); expected one of the tables "
-                "[plan], [capture], [bench], [settle], [faults], [target], [rig], [database], "
+                "[plan], [capture], [bench], [settle], [faults], [target], [detect], [rig], "
+                "[database], "
                 "[telemetry], [[estimator]]"},
         BadCase{"wrong_type", "frames_per_position = 3", "frames_per_position = \"3\"",
                 "capture.frames_per_position = \"3\": expected an integer in 1..1000"},

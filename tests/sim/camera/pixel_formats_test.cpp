@@ -304,7 +304,7 @@ class FormatSweep : public PixelFormats {
       const vision::Pose T = geometry_.T_cam_target(x, kY);
       const auto truth = renderer_->ground_truth(T);
       const vision::FrameMeasurement m = measurer.measure(frame.image);
-      for (const vision::Detection& d : m.detections) {
+      for (const vision::Detection& d : m.primary().detections) {
         for (const auto& t : truth) {
           if (t.id != d.id) continue;
           ++q.markers;
@@ -316,7 +316,7 @@ class FormatSweep : public PixelFormats {
           }
         }
       }
-      for (const vision::ScopeEstimate& e : m.estimates) {
+      for (const vision::ScopeEstimate& e : m.primary().estimates) {
         if (e.scope != "target" || !e.estimate.converged) continue;
         const double error_mm = (e.estimate.distance_m - T.t.norm()) * 1000;
         distance_sq += error_mm * error_mm;

@@ -361,12 +361,13 @@ TEST(Realism, PrintScaleErrorShortensEverySolversDistance) {
     const vision::Pose T = facing(d);
     const auto ref = measurer.measure(as_laid_out.render(T, 1).image);
     const auto got = measurer.measure(as_printed.render(T, 1).image);
-    ASSERT_EQ(ref.estimates.size(), got.estimates.size()) << d;
-    for (size_t i = 0; i < ref.estimates.size(); ++i) {
-      const vision::Estimate &e0 = ref.estimates[i].estimate, &e1 = got.estimates[i].estimate;
+    ASSERT_EQ(ref.primary().estimates.size(), got.primary().estimates.size()) << d;
+    for (size_t i = 0; i < ref.primary().estimates.size(); ++i) {
+      const vision::Estimate &e0 = ref.primary().estimates[i].estimate,
+                             &e1 = got.primary().estimates[i].estimate;
       if (!e0.converged || !e1.converged) continue;
       EXPECT_NEAR(e1.distance_m / e0.distance_m * (1 + s), 1.0, 7e-4)
-          << ref.estimates[i].scope << " " << e0.solver << " at " << d << " m";
+          << ref.primary().estimates[i].scope << " " << e0.solver << " at " << d << " m";
       ++compared;
     }
   }
@@ -482,10 +483,11 @@ TEST(Realism, BowBringsTheMarkerCloserByItsSag) {
     const double expected = (T.t - h_c * T.R.col(2)).norm() - T.t.norm();
     const auto ref = measurer.measure(flat.render(T, 1).image);
     const auto got = measurer.measure(bent.render(T, 1).image);
-    ASSERT_EQ(ref.estimates.size(), got.estimates.size()) << d;
-    for (size_t i = 0; i < ref.estimates.size(); ++i) {
-      if (ref.estimates[i].scope != std::to_string(target.pose_marker_id)) continue;
-      const vision::Estimate &e0 = ref.estimates[i].estimate, &e1 = got.estimates[i].estimate;
+    ASSERT_EQ(ref.primary().estimates.size(), got.primary().estimates.size()) << d;
+    for (size_t i = 0; i < ref.primary().estimates.size(); ++i) {
+      if (ref.primary().estimates[i].scope != std::to_string(target.pose_marker_id)) continue;
+      const vision::Estimate &e0 = ref.primary().estimates[i].estimate,
+                             &e1 = got.primary().estimates[i].estimate;
       if (!e0.converged || !e1.converged) continue;
       EXPECT_NEAR(e1.distance_m - e0.distance_m, expected, 6e-5) << e0.solver << " at " << d;
       ++compared;

@@ -269,6 +269,32 @@ struct MissedMarker {
   std::size_t frames = 0, frames_detected = 0;
 };
 
+// One detector of the run: its detections against the markers in view and
+// their true corners, and its time. Its solvers' figures are the
+// SolverStudy entries named series_name(solver, detector, primary).
+struct DetectorStudy {
+  std::string detector;           // registry name (vision/detectors.hpp)
+  bool primary = false;           // the run's primary detector
+  std::size_t views_in_view = 0;  // markers in view x frames, over the measured positions
+  std::size_t views_found = 0;    // of those, found (each marker once per frame)
+  // RMS distance of the found markers' corners from their true corners (the
+  // layout projected through the run's camera at the true pose), px, over
+  // the detections within 10 px of the truth (a calibration's error is a
+  // few px at most; beyond, the id was decoded somewhere else); NaN when
+  // none was recorded (runs before schema 5).
+  double corner_rms_px = 0;
+  std::size_t corners_vs_truth = 0;  // detections it is over
+  std::size_t misplaced = 0;         // detections of markers in view farther than 10 px
+  // Mean detector time per frame, seconds (stage "detect:DETECTOR"; for the
+  // primary detector of a run before schema 5, stage "detect"); NaN: not recorded.
+  double time_per_frame_s = 0;
+};
+
+// The name of a solver's series in a report: the solver's name for the
+// run's primary detector, "SOLVER@DETECTOR" for another detector's corners.
+std::string series_name(const std::string& solver, const std::string& detector,
+                        const std::string& primary_detector);
+
 struct StageStudy {
   std::string stage;
   stats::Summary seconds;
@@ -324,6 +350,7 @@ struct RunStudy {
   // (at most 4), for pictures.
   std::vector<std::vector<std::int64_t>> class_example_positions;
   std::vector<StageStudy> stages;
+  std::vector<DetectorStudy> detectors;  // the primary first
   std::vector<store::RunEvent> events;
   ReportOptions options;
   // Set when options.recompute_truth replaced the stored truth: what it

@@ -47,6 +47,10 @@ struct RunDescription {
   std::string software_version;       // rig's version
   std::string library_versions_json;  // JSON object, e.g. {"opencv":"4.6.0","sqlite":"3.40.1"}
   std::string host;                   // host name of the machine that ran the sweep
+  // The detector whose detections stand for the run where one detector's
+  // are needed (calibration, frame pictures, external estimators): a
+  // registry name of vision/detectors.hpp; "rig" for runs before schema 5.
+  std::string primary_detector = "rig";
 };
 
 // The camera of a run as it identified itself when the sweep opened it.
@@ -82,6 +86,8 @@ struct StageTime {
 };
 
 struct DetectionRecord {
+  // The detector that found it (a registry name of vision/detectors.hpp).
+  std::string detector = "rig";
   int marker_id = -1;
   int rotation = 0;  // quarter turns clockwise of the observed code
   // Corners A, B, C, D as x0, y0, x1, y1, ..., distorted pixels.
@@ -89,12 +95,18 @@ struct DetectionRecord {
   double contrast = 0;              // grey levels (8-bit)
   int bits_corrected = 0;           // code bits corrected
   double edge_fit_residual_px = 0;  // RMS of edge samples about the fitted sides, px
+  // RMS distance of the corners from the true ones (the layout's corners
+  // projected through the run's camera at the true pose), px; absent when
+  // the true pose is unknown.
+  std::optional<double> true_corner_rms_px;
   bool operator==(const DetectionRecord& o) const;
 };
 
 // One solver's result on one frame, for one scope.
 struct EstimateRecord {
   std::string solver;  // registry name, e.g. "hybrid_ekf"
+  // The detector whose corners it was solved from (vision/detectors.hpp).
+  std::string detector = "rig";
   // "target" (all markers of the target) or the marker id as decimal text ("0").
   std::string scope;
   std::array<double, 9> R_cam_target{};           // row-major rotation

@@ -92,7 +92,7 @@ std::string sqlite_library_version();
 class Store {
  public:
   // Schema version this code creates and reads (the number of migrations).
-  static constexpr int kSchemaVersion = 4;
+  static constexpr int kSchemaVersion = 5;
   // PRAGMA application_id of a rig run database: "RIGD" in ASCII.
   static constexpr std::int32_t kApplicationId = 0x52494744;
 
@@ -181,9 +181,10 @@ class Store {
   // were appended. Throws StoreError if the run has no such position.
   PositionRecord position(std::int64_t run_id, std::int64_t plan_index) const;
 
-  // Every estimate of one solver in a run (all scopes), by plan index, frame
-  // index and order of appending, with the position's true distance. Empty
-  // for an unknown run or solver.
+  // Every estimate of one solver in a run (all scopes, every detector:
+  // EstimateRecord::detector tells them apart), by plan index, frame index
+  // and order of appending, with the position's true distance. Empty for an
+  // unknown run or solver.
   std::vector<EstimateRow> estimates(std::int64_t run_id, const std::string& solver) const;
   // Names of the solvers that have estimates in the run, sorted; empty for an
   // unknown run.

@@ -38,6 +38,7 @@
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 
 #include "db/store/store.hpp"
@@ -46,6 +47,7 @@
 #include "rig/telemetry/telemetry.hpp"
 #include "vision/frame_measurement.hpp"
 #include "vision/frame_source.hpp"
+#include "vision/pose.hpp"
 
 namespace rig::sweep {
 
@@ -95,8 +97,20 @@ class Controller {
   std::unique_ptr<Impl> impl_;
 };
 
-// What rig stores per frame, from what the measurer found.
-db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& measurement,
-                                       int frame_index);
+// What the true corners of a frame are computed from: the layout's corners
+// (metres, target frame) projected through `camera` at T_cam_target (the
+// truth from the bench read-back and the rig geometry).
+struct TrueCorners {
+  const vision::Camera& camera;
+  const vision::Target& target;
+  vision::Pose T_cam_target;
+};
+
+// What rig stores per frame, from what the measurer found: every detector's
+// detections and estimates, each record naming its detector, the primary
+// detector's first. With `truth`, each detection of a layout marker gets its
+// RMS distance from its true corners (DetectionRecord::true_corner_rms_px).
+db::store::FrameRecord to_frame_record(const vision::FrameMeasurement& measurement, int frame_index,
+                                       const std::optional<TrueCorners>& truth = std::nullopt);
 
 }  // namespace rig::sweep

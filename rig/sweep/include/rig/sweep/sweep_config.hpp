@@ -48,6 +48,13 @@
 //   [target]
 //   layout = "../targets/paper.toml"      (required) vision/target.hpp
 //
+//   [detect]
+//   detectors = ["rig", "aruco:subpix"]  detectors of vision/detectors.hpp, each once, that
+//                               decode the target's family; absent = every one that does.
+//                               Every detector runs on every frame, every solver on each
+//                               one's corners; the first in registry order is the primary
+//                               (its corners go to external estimators)
+//
 //   [rig]                       exactly one of:
 //   file = "../rigs/sim.toml"   a rig file (vision/rig_geometry.hpp), or inline tables
 //   [rig.camera_mount]          offset_mm = [x, y, z], misalignment_deg = [rx, ry, rz]
@@ -178,6 +185,11 @@ struct SweepConfig {
   vision::Camera camera = vision::Camera::paper_default();
   std::string target_layout_path;  // absolute
   vision::Target target;
+  // [detect] detectors, in vision::detector_names() order whatever the
+  // file's (the measurer's order; the first is the run's primary detector);
+  // default every detector that decodes target.family. Never empty: a family
+  // no detector reads is refused.
+  std::vector<std::string> detectors;
   std::string rig_geometry_path;  // absolute file the geometry came from ("" if inline)
   std::string rig_geometry_text;  // the geometry's TOML (file content, or the inline tables)
   vision::RigGeometry geometry;
