@@ -219,6 +219,12 @@ void read_faults(Table faults, SweepConfig* c) {
   faults.reject_unknown();
 }
 
+void read_compute(Table compute, SweepConfig* c) {
+  c->compute_threads = static_cast<int>(
+      compute.integer_or("threads", default_compute_threads(), 1, FramePool::kMaxThreads));
+  compute.reject_unknown();
+}
+
 void read_target(Table target, SweepConfig* c) {
   c->target_layout_path = target.existing_file("layout", "a target layout");
   c->target = load_named(target, "layout", "a target layout (vision/target)",
@@ -486,6 +492,7 @@ nlohmann::json SweepConfig::to_json() const {
        {{"publish", telemetry.publish},
         {"control", telemetry.control},
         {"allow_remote", telemetry.allow_remote}}},
+      {"compute", {{"threads", compute_threads}}},
       {"estimators", estimators_json()},
   };
 }
@@ -499,12 +506,12 @@ SweepConfig load_sweep_config(const std::string& path) {
   Table root = file.root();
   // Unknown tables first: a misspelt [setle] must not let its defaults be checked.
   for (const char* name : {"plan", "capture", "bench", "settle", "faults", "target", "rig",
-                           "database", "telemetry", "estimator"}) {
+                           "database", "telemetry", "compute", "estimator"}) {
     root.ignore(name);
   }
   root.reject_unknown(
       "one of the tables [plan], [capture], [bench], [settle], [faults], [target], [rig], "
-      "[database], [telemetry], [[estimator]]");
+      "[database], [telemetry], [compute], [[estimator]]");
   read_bench(root.table("bench"), &c);
   c.plan = read_plan(root.table("plan"), c.bench_profile.soft_limits);
   read_capture(root.table("capture"), &c);
@@ -516,6 +523,7 @@ SweepConfig load_sweep_config(const std::string& path) {
   read_rig(rig, &c);
   read_database(root.table("database"), &c);
   read_telemetry(root.optional_table("telemetry"), &c);
+  read_compute(root.optional_table("compute"), &c);
   read_estimators(root, &c);
   // Consistency of the parts with each other.
   check_target_in_front(rig, c);
