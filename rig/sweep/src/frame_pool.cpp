@@ -36,10 +36,11 @@ FramePool::~FramePool() {
 FramePool::Ticket FramePool::submit(cv::Mat image) {
   std::packaged_task<vision::FrameMeasurement()> task(
       [this, image = std::move(image)] { return measurer_.measure(image); });
-  Ticket ticket = task.get_future();
+  Ticket ticket{task.get_future(), 0};
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    queue_.push_back(std::move(task));
+    ticket.sequence = submitted_++;
+    queue_.push_back({std::move(task), ticket.sequence});
   }
   queued_.notify_one();
   return ticket;
@@ -47,21 +48,22 @@ FramePool::Ticket FramePool::submit(cv::Mat image) {
 
 vision::FrameMeasurement FramePool::take(Ticket& ticket) {
   // The oldest queued frame first: with one thread that is the serial order.
-  while (ticket.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
-    if (!run_one_queued()) {
-      ticket.wait();
+  std::future<vision::FrameMeasurement>& m = ticket.measurement;
+  while (m.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    if (!run_one_queued(ticket.sequence)) {
+      m.wait();
       break;
     }
   }
-  return ticket.get();
+  return m.get();
 }
 
-bool FramePool::run_one_queued() {
+bool FramePool::run_one_queued(std::uint64_t up_to) {
   std::packaged_task<vision::FrameMeasurement()> task;
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    if (queue_.empty()) return false;
-    task = std::move(queue_.front());
+    if (queue_.empty() || queue_.front().sequence > up_to) return false;
+    task = std::move(queue_.front().task);
     queue_.pop_front();
   }
   task();  // an exception is stored in the ticket
@@ -75,7 +77,7 @@ void FramePool::work() {
       std::unique_lock<std::mutex> lock(mutex_);
       queued_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
       if (stopping_) return;
-      task = std::move(queue_.front());
+      task = std::move(queue_.front().task);
       queue_.pop_front();
     }
     task();

@@ -15,8 +15,9 @@
 //
 // threads = 1 is the serial path: nothing runs in the background; take()
 // measures the frame on the caller's thread. threads = N > 1 starts N - 1
-// worker threads, and a caller waiting in take() measures queued frames
-// itself, so N threads measure at most. Frames are started in submission
+// worker threads, and a caller waiting in take() measures the frames queued
+// up to its own itself (never later ones, which would hold up what the caller
+// does next), so N threads measure at most. Frames are started in submission
 // order.
 #pragma once
 
@@ -39,7 +40,10 @@ int default_compute_threads();
 class FramePool {
  public:
   // A submitted frame's measurement, to be taken once with take().
-  using Ticket = std::future<vision::FrameMeasurement>;
+  struct Ticket {
+    std::future<vision::FrameMeasurement> measurement;
+    std::uint64_t sequence = 0;  // submission order
+  };
 
   // Measures with `measurer`, which must outlive the pool. Precondition:
   // 1 <= threads <= kMaxThreads (std::invalid_argument otherwise).
@@ -59,7 +63,8 @@ class FramePool {
   Ticket submit(cv::Mat image);
 
   // The measurement of `ticket`, waiting for it; while it waits, the caller
-  // measures frames still queued. Rethrows what measure() threw (e.g.
+  // measures the frames still queued that were submitted before it (its own
+  // included). Rethrows what measure() threw (e.g.
   // std::invalid_argument for an image type the detector cannot read).
   // Precondition: ticket came from this pool's submit() and was not taken.
   // A ticket that is dropped instead is measured all the same, and the
@@ -68,13 +73,18 @@ class FramePool {
 
  private:
   void work();
-  bool run_one_queued();
+  bool run_one_queued(std::uint64_t up_to);
 
   const vision::FrameMeasurer& measurer_;
   const int threads_;
   std::mutex mutex_;
   std::condition_variable queued_;
-  std::deque<std::packaged_task<vision::FrameMeasurement()>> queue_;
+  struct Job {
+    std::packaged_task<vision::FrameMeasurement()> task;
+    std::uint64_t sequence;
+  };
+  std::deque<Job> queue_;
+  std::uint64_t submitted_ = 0;
   bool stopping_ = false;
   std::vector<std::thread> workers_;
 };
