@@ -6,13 +6,20 @@
 // removed at exit).
 //  - BM_StudyRun: loading the run (the three indexed passes) and every statistic.
 //  - BM_ReportWrite: the whole `rig report`: study, HTML, JSON and CSV.
+//  - BM_SqliteEstimateScan: the peer, SQLite alone: every estimate row read
+//    in row order with the columns the report reads (22 per row, each
+//    fetched), nothing done with them. BM_StudyRun over it is the report's
+//    time in units of SQLite's own floor; the rest is ours.
 // Run: scripts/bench bench_report   (or build-*/tests/bench/bench_report)
 #include <benchmark/benchmark.h>
+#include <sqlite3.h>
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 
 #include "db/report/report.hpp"
@@ -70,6 +77,38 @@ void BM_StudyRun(benchmark::State& state) {
                          benchmark::Counter::kIsRate);
 }
 BENCHMARK(BM_StudyRun)->Unit(benchmark::kSecond)->Iterations(3);
+
+void BM_SqliteEstimateScan(benchmark::State& state) {
+  const std::string& path = database();
+  std::int64_t rows = 0;
+  for (auto _ : state) {
+    sqlite3* db = nullptr;
+    if (sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX, nullptr) !=
+        SQLITE_OK)
+      throw std::runtime_error(path + ": " + sqlite3_errmsg(db));
+    sqlite3_stmt* select = nullptr;
+    sqlite3_prepare_v2(db,
+                       "SELECT frame_id, solver, scope, r00, r01, r02, r10, r11, r12, r20, r21, "
+                       "r22, distance_m, reprojection_error_px, generalization_error_px, "
+                       "converged, termination, time_us, ambiguity_ratio, tx_m, ty_m, tz_m "
+                       "FROM estimates ORDER BY id",
+                       -1, &select, nullptr);
+    double sum = 0;
+    rows = 0;
+    while (sqlite3_step(select) == SQLITE_ROW) {
+      for (int c : {1, 2, 16})
+        sum += sqlite3_column_bytes(select, c) + (sqlite3_column_text(select, c) != nullptr);
+      for (int c = 0; c < 22; ++c)
+        if (c != 1 && c != 2 && c != 16) sum += sqlite3_column_double(select, c);
+      ++rows;
+    }
+    sqlite3_finalize(select);
+    sqlite3_close(db);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.counters["rows"] = static_cast<double>(rows);
+}
+BENCHMARK(BM_SqliteEstimateScan)->Unit(benchmark::kSecond)->Iterations(3);
 
 void BM_ReportWrite(benchmark::State& state) {
   const std::string& db = database();

@@ -16,17 +16,29 @@
 // all four markers are in view: checked), rendered once before timing. The
 // frames of a position are cycled, so a run of many positions repeats them.
 //
+// Frames are measured by the product's rig::sweep::FramePool with T threads
+// (the sweep file's [compute] threads): T = 1 is the serial path (every frame
+// measured on the benchmark's thread); T > 1 measures the frames of a
+// position in parallel, as the controller does; ahead = 1 also hands the
+// next position's frames to the pool before this position's records are
+// built and stored, as the controller does for a replay
+// (SweepConfig::acquire_ahead). The records are the same either way.
+//
 // Benchmarks (positions per second = items_per_second; target: >= 100
-// with 4 markers and every solver):
-//   BM_PositionCompute/frames:F           measure + to_frame_record for F frames,
+// with 4 markers and every solver; with 2 threads, ahead, durable, 3 frames:
+// >= 600, and read as the ratio to threads:1 in the same run):
+//   BM_PositionCompute/frames:F/threads:T/ahead:A
+//                                          measure + to_frame_record for F frames,
 //                                          ground truth once
-//   BM_PositionComputeAndStore/frames:F/durable:D
+//   BM_PositionComputeAndStore/frames:F/durable:D/threads:T/ahead:A
 //                                          the same + append_position;
 //                                          durable = StoreOptions::durable_commits
 //                                          (config/sweeps/ci.toml: true)
 //   Counters per position (ms): detect_ms, solve_ms (every solver, both scopes,
-//   all frames), truth_ms, record_ms (to_frame_record), store_ms
-//   (append_position, commit included); markers_per_frame (detected).
+//   all frames; wall times inside measure, so with T > 1 they include the
+//   threads' contention), truth_ms, record_ms (to_frame_record), store_ms
+//   (append_position, commit included); markers_per_frame (detected);
+//   positions_per_s_median (1 / the median time between two positions done).
 //   BM_EstimateInsertRate/durable:D       append_position of a real 3-frame
 //                                          position (4 detections, 10 solvers x
 //                                          2 scopes per frame = 60 estimate
@@ -56,12 +68,14 @@
 #include <fstream>
 #include <map>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "db/store/store.hpp"
 #include "rig/sweep/controller.hpp"
+#include "rig/sweep/frame_pool.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "sim/scene/renderer.hpp"
 #include "vision/camera.hpp"
@@ -135,14 +149,32 @@ struct StageSums {
   std::vector<double> position_s;  // wall time of each whole position
 };
 
-// What Controller::measure_position builds once the frames are in hand.
-db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer,
-                                           const SimulatedRig& rig, std::int64_t plan_index,
-                                           int frames_per_position, StageSums& sums) {
+// A position whose frames are in the pool: what the controller's acquire
+// leaves for finish (rig/sweep/src/controller.cpp).
+struct AcquiredPosition {
+  std::int64_t plan_index = 0;
+  std::vector<rig::sweep::FramePool::Ticket> frames;
+};
+
+// The position's frames handed to the pool, as the controller's capture does.
+AcquiredPosition acquire_position(rig::sweep::FramePool& pool, const SimulatedRig& rig,
+                                  std::int64_t plan_index, int frames_per_position) {
   const BenchPosition& p =
       rig.positions[static_cast<std::size_t>(plan_index) % rig.positions.size()];
+  AcquiredPosition a{plan_index, {}};
+  for (int k = 0; k < frames_per_position; ++k)
+    a.frames.push_back(pool.submit(p.frames[static_cast<std::size_t>(k)]));
+  return a;
+}
+
+// What the controller's finish builds from an acquired position: the truth,
+// each frame's measurement taken in frame order and its record.
+db::store::PositionRecord finish_position(rig::sweep::FramePool& pool, const SimulatedRig& rig,
+                                          AcquiredPosition& a, StageSums& sums) {
+  const BenchPosition& p =
+      rig.positions[static_cast<std::size_t>(a.plan_index) % rig.positions.size()];
   db::store::PositionRecord rec;
-  rec.plan_index = plan_index;
+  rec.plan_index = a.plan_index;
   rec.commanded_x_mm = p.x_mm;
   rec.commanded_y_mm = p.y_mm;
   rec.measured_x_mm = p.x_mm;
@@ -160,8 +192,8 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
 
   double detect_s = 0;
   std::map<std::string, double> solve_s;
-  for (int k = 0; k < frames_per_position; ++k) {
-    const vision::FrameMeasurement m = measurer.measure(p.frames[static_cast<std::size_t>(k)]);
+  for (std::size_t k = 0; k < a.frames.size(); ++k) {
+    const vision::FrameMeasurement m = pool.take(a.frames[k]);
     detect_s += m.primary().detect_s;
     for (const auto& [name, s] : m.primary().solve_s) {
       solve_s[name] += s;
@@ -169,7 +201,7 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
     }
     sums.detections += static_cast<std::int64_t>(m.primary().detections.size());
     const auto record_start = Clock::now();
-    db::store::FrameRecord f = rig::sweep::to_frame_record(m, k);
+    db::store::FrameRecord f = rig::sweep::to_frame_record(m, static_cast<int>(k));
     f.host_timestamp_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(
                               std::chrono::system_clock::now().time_since_epoch())
                               .count();
@@ -178,12 +210,20 @@ db::store::PositionRecord measure_position(const vision::FrameMeasurer& measurer
     sums.record += vision::seconds_since(record_start);
   }
   sums.detect += detect_s;
-  sums.frames += frames_per_position;
+  sums.frames += static_cast<std::int64_t>(a.frames.size());
   rec.stage_times.push_back({"detect", detect_s});
-  for (const auto& name : measurer.solver_names())
+  for (const auto& name : pool.measurer().solver_names())
     rec.stage_times.push_back({"solve:" + name, solve_s[name]});
   rec.status = db::store::PositionStatus::kOk;
   return rec;
+}
+
+// One position, serially: acquired and finished.
+db::store::PositionRecord measure_position(rig::sweep::FramePool& pool, const SimulatedRig& rig,
+                                           std::int64_t plan_index, int frames_per_position,
+                                           StageSums& sums) {
+  AcquiredPosition a = acquire_position(pool, rig, plan_index, frames_per_position);
+  return finish_position(pool, rig, a, sums);
 }
 
 class ScratchDir {
@@ -244,59 +284,70 @@ void report_stages(benchmark::State& state, const StageSums& sums, std::int64_t 
   state.SetItemsProcessed(positions);  // positions per second, mean
 }
 
-void BM_PositionCompute(benchmark::State& state) {
-  const int frames = static_cast<int>(state.range(0));
+// One position per iteration, `frames` each, measured by a pool of `threads`;
+// with `ahead`, the next position is acquired before this one is finished
+// (and stored, when `db` is given). The position acquired last is dropped.
+void run_positions(benchmark::State& state, int frames, int threads, bool ahead, SweepStore* db) {
   const SimulatedRig& rig = simulated_rig();
   const vision::FrameMeasurer measurer(rig.camera, rig.target);
+  rig::sweep::FramePool pool(measurer, threads);
   StageSums sums;
-  std::int64_t index = 0;
+  std::int64_t next = 0;
+  std::optional<AcquiredPosition> pending;
+  auto last_done = Clock::now();
   for (auto _ : state) {
-    const auto start = Clock::now();
-    db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
+    if (!pending) pending = acquire_position(pool, rig, next++, frames);
+    std::optional<AcquiredPosition> following;
+    if (ahead) following = acquire_position(pool, rig, next++, frames);
+    const db::store::PositionRecord rec = finish_position(pool, rig, *pending, sums);
+    if (db != nullptr) {
+      const auto store_start = Clock::now();
+      db->store.append_position(db->run_id, rec);
+      sums.store += vision::seconds_since(store_start);
+    }
     benchmark::DoNotOptimize(rec);
-    sums.position_s.push_back(vision::seconds_since(start));
+    pending = std::move(following);
+    const auto done = Clock::now();
+    sums.position_s.push_back(std::chrono::duration<double>(done - last_done).count());
+    last_done = done;
   }
   report_stages(state, sums, state.iterations());
 }
+
+void BM_PositionCompute(benchmark::State& state) {
+  run_positions(state, static_cast<int>(state.range(0)), static_cast<int>(state.range(1)),
+                state.range(2) != 0, nullptr);
+}
 BENCHMARK(BM_PositionCompute)
-    ->ArgName("frames")
-    ->Arg(1)
-    ->Arg(kMaxFramesPerPosition)
+    ->ArgNames({"frames", "threads", "ahead"})
+    ->Args({1, 1, 0})
+    ->Args({kMaxFramesPerPosition, 1, 0})
+    ->Args({kMaxFramesPerPosition, 2, 1})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
 void BM_PositionComputeAndStore(benchmark::State& state) {
-  const int frames = static_cast<int>(state.range(0));
-  const SimulatedRig& rig = simulated_rig();
-  const vision::FrameMeasurer measurer(rig.camera, rig.target);
   SweepStore db(state.range(1) != 0);
-  StageSums sums;
-  std::int64_t index = 0;
-  for (auto _ : state) {
-    const auto start = Clock::now();
-    const db::store::PositionRecord rec = measure_position(measurer, rig, index++, frames, sums);
-    const auto store_start = Clock::now();
-    db.store.append_position(db.run_id, rec);
-    sums.store += vision::seconds_since(store_start);
-    sums.position_s.push_back(vision::seconds_since(start));
-  }
-  report_stages(state, sums, state.iterations());
+  run_positions(state, static_cast<int>(state.range(0)), static_cast<int>(state.range(2)),
+                state.range(3) != 0, &db);
 }
 BENCHMARK(BM_PositionComputeAndStore)
-    ->ArgNames({"frames", "durable"})
-    ->Args({1, 1})
-    ->Args({kMaxFramesPerPosition, 1})
-    ->Args({1, 0})
-    ->Args({kMaxFramesPerPosition, 0})
+    ->ArgNames({"frames", "durable", "threads", "ahead"})
+    ->Args({1, 1, 1, 0})
+    ->Args({kMaxFramesPerPosition, 1, 1, 0})
+    ->Args({kMaxFramesPerPosition, 1, 2, 0})
+    ->Args({kMaxFramesPerPosition, 1, 2, 1})
+    ->Args({kMaxFramesPerPosition, 0, 1, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
 void BM_EstimateInsertRate(benchmark::State& state) {
   const SimulatedRig& rig = simulated_rig();
   const vision::FrameMeasurer measurer(rig.camera, rig.target);
+  rig::sweep::FramePool pool(measurer, 1);
   StageSums unused;
   // A real position as the controller stores it, appended under new plan indices.
-  db::store::PositionRecord rec = measure_position(measurer, rig, 0, kMaxFramesPerPosition, unused);
+  db::store::PositionRecord rec = measure_position(pool, rig, 0, kMaxFramesPerPosition, unused);
   std::int64_t estimate_rows = 0, detection_rows = 0;
   for (const auto& f : rec.frames) {
     estimate_rows += static_cast<std::int64_t>(f.estimates.size());
@@ -345,13 +396,14 @@ void BM_ResidentMemory10k(benchmark::State& state) {
   constexpr std::int64_t kPositions = 10'000;
   const SimulatedRig& rig = simulated_rig();
   const vision::FrameMeasurer measurer(rig.camera, rig.target);
+  rig::sweep::FramePool pool(measurer, 1);
   SweepStore db(/*durable_commits=*/true);
   StageSums sums;
   std::vector<std::pair<std::int64_t, double>> samples;
   double sqlite_heap_at_100 = 0;  // SQLite's own allocations (page cache, statements), MiB
   for (auto _ : state) {
     for (std::int64_t index = 0; index < kPositions; ++index) {
-      const db::store::PositionRecord rec = measure_position(measurer, rig, index, 1, sums);
+      const db::store::PositionRecord rec = measure_position(pool, rig, index, 1, sums);
       const auto store_start = Clock::now();
       db.store.append_position(db.run_id, rec);
       sums.store += vision::seconds_since(store_start);

@@ -229,6 +229,7 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
   out.run_id = store.start_run(description(spec));
   Draws draws(spec.seed);
   const int ok_positions = spec.positions - spec.failed_positions;
+  std::vector<db::store::PositionRecord> positions;
   for (int i = 0; i < spec.positions; ++i) {
     db::store::PositionRecord p = position_at(spec, i);
     if (i >= ok_positions) {
@@ -238,8 +239,13 @@ SyntheticRun write_synthetic_run(const std::string& path, const SyntheticRunSpec
     } else {
       out.estimates += add_frames(spec, draws, p);
     }
-    store.append_position(out.run_id, p);
+    if (!spec.stored_in_reverse)
+      store.append_position(out.run_id, p);
+    else
+      positions.push_back(std::move(p));
   }
+  for (auto p = positions.rbegin(); p != positions.rend(); ++p)
+    store.append_position(out.run_id, *p);
   store.record_event(out.run_id, "pause", "synthetic pause", ok_positions / 2);
   store.record_event(out.run_id, "resume", "synthetic resume", ok_positions / 2);
   if (spec.status != db::store::RunStatus::kRunning) {

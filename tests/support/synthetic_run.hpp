@@ -57,6 +57,10 @@ struct SyntheticRunSpec {
   double bound_at_1m_m_per_px = 0.01;
   // The last failed_positions plan indices are stored as failed, without frames.
   int failed_positions = 0;
+  // Positions appended last plan index first (the same rows otherwise), as
+  // positions measured again after a resume land after those stored since:
+  // row order is then not plan order.
+  bool stored_in_reverse = false;
   // Markers 0-3 are visible; marker 3 is never detected beyond this distance,
   // m (so the detection rate falls for the smallest markers).
   double marker3_lost_beyond_m = 0.8;

@@ -3,11 +3,12 @@
 // database in a few indexed passes (private to db_report).
 //
 // Query plans (checked by ReportQueries.UseTheIndexesAndScanNoTable in
-// tests/db/report/report_input_test.cpp with EXPLAIN QUERY PLAN): every pass
-// starts from positions (run_id, plan_index), reaches frames through
-// (position_id, frame_index) and estimates or detections through their
-// frame_id indexes, so no pass scans a whole table of a file holding many
-// runs.
+// tests/db/report/report_input_test.cpp with EXPLAIN QUERY PLAN): the passes
+// over frames and detections start from positions (run_id, plan_index) and
+// reach frames through (position_id, frame_index) and detections through
+// their frame_id index; the estimates are read as one range of row ids,
+// found through their frame_id index from the run's frame ids; so no pass
+// scans a whole table of a file holding many runs.
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -105,6 +106,7 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
                  const std::function<void(RunData&)>& amend_truth = {});
 
 // The SQL of the passes over estimates and detections (for the plan test).
+extern const char* const kEstimateIdsQuery;
 extern const char* const kEstimatesQuery;
 extern const char* const kDetectionsQuery;
 extern const char* const kFramesQuery;

@@ -133,6 +133,12 @@ std::string Statement::get_text(int column) const {
   const int size = sqlite3_column_bytes(statement_, column);
   return text != nullptr ? std::string(reinterpret_cast<const char*>(text), size) : std::string();
 }
+std::string_view Statement::get_text_view(int column) const {
+  const auto* text = sqlite3_column_text(statement_, column);
+  const int size = sqlite3_column_bytes(statement_, column);
+  return text != nullptr ? std::string_view(reinterpret_cast<const char*>(text), size)
+                         : std::string_view();
+}
 std::string Statement::get_blob(int column) const {
   const void* blob = sqlite3_column_blob(statement_, column);
   const int size = sqlite3_column_bytes(statement_, column);

@@ -16,6 +16,7 @@
 #include "external_estimates.hpp"
 #include "motion/errors.hpp"
 #include "rig/sweep/frame_files.hpp"
+#include "rig/sweep/frame_pool.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "rig/sweep/sweep_camera.hpp"
 #include "run_log.hpp"
@@ -122,6 +123,12 @@ class FaultHandler {
   RunLog& log_;
 };
 
+// A frame as grabbed, and its measurement under way in the FramePool.
+struct CapturedFrame {
+  vision::Frame frame;
+  FramePool::Ticket measurement;
+};
+
 // What one plan position measures (controller.hpp): the move and settle, the
 // frames after it, the truth at the read-back, every solver on every frame,
 // the frames saved when the sweep file asks for it.
@@ -137,6 +144,7 @@ class PositionMeasurer {
         log_(log),
         faults_(faults),
         measurer_(config.camera, config.target, {}, config.detectors),
+        pool_(measurer_, config.compute_threads),
         externals_(config.estimators, measurer_.camera(), measurer_.target()),
         frames_folder_(std::move(frames_folder)) {}
 
@@ -164,24 +172,49 @@ class PositionMeasurer {
 
   // The record of position `index`: ok, or failed with its reason (the fault
   // recorded). Throws RunEnd when the run cannot go on.
-  db::store::PositionRecord measure(std::int64_t index) {
-    const PlanPosition& p = plan_.positions()[static_cast<std::size_t>(index)];
+  db::store::PositionRecord measure(std::int64_t index) { return finish(acquire(index)); }
+
+  // A position acquired: moved, settled, its frames taken and being measured
+  // in the FramePool; or why it failed, not yet recorded.
+  struct Acquired {
     db::store::PositionRecord rec;
-    rec.plan_index = index;
-    rec.commanded_x_mm = p.x_mm;
-    rec.commanded_y_mm = p.y_mm;
+    std::vector<CapturedFrame> frames;
+    std::optional<PositionFailure> failure;
+  };
+
+  // The first half of measure(): the move, the settle and the frames. The
+  // faults the position survives are recorded as they happen; the one that
+  // fails it is kept for finish(). Throws RunEnd when the run cannot go on.
+  Acquired acquire(std::int64_t index) {
+    const PlanPosition& p = plan_.positions()[static_cast<std::size_t>(index)];
+    Acquired a;
+    a.rec.plan_index = index;
+    a.rec.commanded_x_mm = p.x_mm;
+    a.rec.commanded_y_mm = p.y_mm;
     try {
-      const std::vector<vision::Frame> frames = settle_and_capture(index, p, rec);
-      const vision::Pose truth = add_truth(rec);
-      measure_frames(index, frames, truth, rec);
-      rec.status = db::store::PositionStatus::kOk;
+      a.frames = settle_and_capture(index, p, a.rec);
     } catch (const PositionFailure& f) {
-      log_.fault(f.kind, f.reason, "position_failed", index);
-      rec.status = db::store::PositionStatus::kFailed;
-      rec.failure_reason = f.kind + ": " + f.reason;
-      rec.frames.clear();
+      a.failure = f;
     }
-    return rec;
+    return a;
+  }
+
+  // The second half of measure(): the failure recorded, or the truth and the
+  // frames' measurements (external estimators included). Throws RunEnd when
+  // the run cannot go on.
+  db::store::PositionRecord finish(Acquired a) {
+    db::store::PositionRecord& rec = a.rec;
+    if (a.failure) {
+      log_.fault(a.failure->kind, a.failure->reason, "position_failed", rec.plan_index);
+      rec.status = db::store::PositionStatus::kFailed;
+      rec.failure_reason = a.failure->kind + ": " + a.failure->reason;
+      rec.frames.clear();
+      return std::move(rec);
+    }
+    const vision::Pose truth = add_truth(rec);
+    measure_frames(rec.plan_index, a.frames, truth, rec);
+    rec.status = db::store::PositionStatus::kOk;
+    return std::move(rec);
   }
 
  private:
@@ -252,10 +285,12 @@ class PositionMeasurer {
     }
   }
 
-  // Moves, settles and takes the position's frames; takes them again when
-  // the read-back moved during the exposures (capture_retries times, then
-  // the position fails). Fills the record's read-back and stage times.
-  std::vector<vision::Frame> settle_and_capture(std::int64_t index, const PlanPosition& p,
+  // Moves, settles and takes the position's frames, each handed to the
+  // FramePool as it arrives; takes them again when the read-back moved
+  // during the exposures (capture_retries times, then the position fails;
+  // the measurements of frames taken again are dropped). Fills the record's
+  // read-back and stage times.
+  std::vector<CapturedFrame> settle_and_capture(std::int64_t index, const PlanPosition& p,
                                                 db::store::PositionRecord& rec) {
     for (int attempt = 0;; ++attempt) {
       const auto [status, settle_s] = move_and_settle(index, p, rec);
@@ -265,7 +300,7 @@ class PositionMeasurer {
       const auto settled_at = std::chrono::system_clock::now();
       if (config_.settle.dwell.count() > 0) std::this_thread::sleep_for(config_.settle.dwell);
       const auto capture_start = Clock::now();
-      const std::vector<vision::Frame> frames = capture_reopening(index, settled_at);
+      std::vector<CapturedFrame> frames = capture_reopening(index, settled_at);
       rec.stage_times.push_back({"capture", vision::seconds_since(capture_start)});
       const std::string unverified = unverified_reason(status.position);
       if (unverified.empty()) return frames;
@@ -278,7 +313,7 @@ class PositionMeasurer {
   // The position's frames (capture). A camera that fails is reopened
   // (reopen_camera) and the frames are taken again, once; a camera that does
   // not come back, or fails again, fails the position.
-  std::vector<vision::Frame> capture_reopening(std::int64_t index,
+  std::vector<CapturedFrame> capture_reopening(std::int64_t index,
                                                std::chrono::system_clock::time_point settled_at) {
     try {
       return capture(settled_at);
@@ -334,15 +369,17 @@ class PositionMeasurer {
            " attempts; last: " + last + ")";
   }
 
-  // Triggers and grabs the position's frames after settled_at.
-  std::vector<vision::Frame> capture(std::chrono::system_clock::time_point settled_at) {
-    std::vector<vision::Frame> frames;
+  // Triggers and grabs the position's frames after settled_at, handing each
+  // to the FramePool as it arrives.
+  std::vector<CapturedFrame> capture(std::chrono::system_clock::time_point settled_at) {
+    std::vector<CapturedFrame> frames;
     for (int k = 0; k < config_.frames_per_position; ++k) {
       for (int discarded = 0;; ++discarded) {
         camera_.trigger();
         vision::Frame frame = camera_.grab(config_.grab_timeout);
         if (frame.host_time >= settled_at) {
-          frames.push_back(std::move(frame));
+          FramePool::Ticket measurement = pool_.submit(frame.image);
+          frames.push_back({std::move(frame), std::move(measurement)});
           break;
         }
         if (discarded >= config_.capture.retries)
@@ -382,16 +419,19 @@ class PositionMeasurer {
     return truth.T_cam_target;
   }
 
-  // Every detector, every solver on each detector's corners and every
-  // external estimator on each frame, with the stage times: "detect" and
-  // "solve:SOLVER" of the primary detector (the external estimators' on its
-  // corners), "detect:DETECTOR" of each detector.
-  void measure_frames(std::int64_t index, const std::vector<vision::Frame>& frames,
+  // Every detector and every solver on each detector's corners for each
+  // frame (measured by the FramePool, taken here in frame order), then, in
+  // frame order on this thread, what must stay ordered: the log, the records
+  // and every external estimator (on the primary detector's corners); with
+  // the stage times: "detect" and "solve:SOLVER" of the primary detector,
+  // "detect:DETECTOR" of each detector.
+  void measure_frames(std::int64_t index, std::vector<CapturedFrame>& captured,
                       const vision::Pose& truth, db::store::PositionRecord& rec) {
     std::map<std::string, double> detect_s;
     std::map<std::string, double> solve_s;
-    for (std::size_t k = 0; k < frames.size(); ++k) {
-      const vision::FrameMeasurement m = measurer_.measure(frames[k].image);
+    for (std::size_t k = 0; k < captured.size(); ++k) {
+      const vision::FrameMeasurement m = pool_.take(captured[k].measurement);
+      const vision::Frame& frame = captured[k].frame;
       // Detected corners no solver can take (e.g. outside the lens model's
       // invertible region): the scope has no estimates; say why.
       for (const vision::DetectorMeasurement& dm : m.detectors) {
@@ -404,10 +444,10 @@ class PositionMeasurer {
       }
       for (const auto& [name, s] : m.primary().solve_s)
         solve_s[name] += s;
-      rec.frames.push_back(frame_record(index, static_cast<int>(k), frames[k], m, truth));
+      rec.frames.push_back(frame_record(index, static_cast<int>(k), frame, m, truth));
       try {
-        externals_.measure(index, frames[k].image, rec.frames.back().image_path, m,
-                           rec.frames.back(), solve_s, log_);
+        externals_.measure(index, frame.image, rec.frames.back().image_path, m, rec.frames.back(),
+                           solve_s, log_);
       } catch (const std::runtime_error& e) {
         throw RunEnd{db::store::RunStatus::kFailed, e.what()};
       }
@@ -465,7 +505,8 @@ class PositionMeasurer {
   RunLog& log_;
   FaultHandler& faults_;
   const vision::FrameMeasurer measurer_;
-  ExternalEstimates externals_;                               // the sweep file's [[estimator]]s
+  FramePool pool_;               // measures with measurer_: declared after it, destroyed before it
+  ExternalEstimates externals_;  // the sweep file's [[estimator]]s
   const std::optional<std::filesystem::path> frames_folder_;  // set when frames are saved
 };
 
@@ -514,7 +555,10 @@ struct Controller::Impl {
       end = e;
     }
     try {
-      for (std::size_t i = 0; i < plan.size() && !end; ++i) {
+      // Retakes replace stored records and record an event first: one at a time.
+      const bool ahead = config.acquire_ahead && !retake_failed;
+      if (!end && ahead) end = measure_ahead(stored_already, outcome, consecutive_failed);
+      for (std::size_t i = 0; i < plan.size() && !end && !ahead; ++i) {
         if (stored_already[i]) continue;
         end = measure_and_store(static_cast<std::int64_t>(i), outcome, consecutive_failed);
       }
@@ -575,6 +619,62 @@ struct Controller::Impl {
     } catch (const RunEnd& e) {
       return e;
     }
+    return store_position(std::move(rec), outcome, consecutive_failed);
+  }
+
+  // SweepConfig::acquire_ahead: every position the run does not have, in
+  // plan order, each acquired (moved to, settled, its frames taken and handed
+  // to the FramePool) before the one before it is finished and stored, so
+  // that its frames are measured meanwhile. What is recorded, and in which
+  // order, is what measure_and_store records: acquiring records nothing
+  // there (a replay's bench and frames), a position's failure is recorded
+  // when it is finished, and a pause or an abort finishes the position
+  // acquired first. Returns how the run ends when it ends early.
+  std::optional<RunEnd> measure_ahead(const std::vector<bool>& stored_already, RunOutcome& outcome,
+                                      int& consecutive_failed) {
+    std::optional<PositionMeasurer::Acquired> pending;
+    const auto complete = [&]() -> std::optional<RunEnd> {
+      PositionMeasurer::Acquired a = std::move(*pending);
+      pending.reset();
+      log.set_current(a.rec.plan_index);
+      db::store::PositionRecord rec;
+      try {
+        rec = positions.finish(std::move(a));
+      } catch (const RunEnd& e) {
+        return e;
+      }
+      return store_position(std::move(rec), outcome, consecutive_failed);
+    };
+    for (std::size_t i = 0; i < plan.size(); ++i) {
+      if (stored_already[i]) continue;
+      const auto index = static_cast<std::int64_t>(i);
+      if (pending && (control.pause_requested() || control.abort_requested()))
+        if (auto end = complete()) return end;
+      if (!faults.honour_pause(index))
+        return RunEnd{db::store::RunStatus::kAborted,
+                      faults.abort_reason("before position " + std::to_string(index))};
+      std::optional<PositionMeasurer::Acquired> next;
+      try {
+        next = positions.acquire(index);
+      } catch (const RunEnd& e) {
+        if (pending)
+          if (auto end = complete()) return end;
+        return e;
+      }
+      if (pending)
+        if (auto end = complete()) return end;
+      pending = std::move(next);
+    }
+    if (pending) return complete();
+    return std::nullopt;
+  }
+
+  // A measured position stored (replacing its failed record when it is a
+  // retake), published and counted. Returns how the run ends when it ends
+  // here: after max_consecutive_failed failed positions in a row, or aborted.
+  std::optional<RunEnd> store_position(db::store::PositionRecord rec, RunOutcome& outcome,
+                                       int& consecutive_failed) {
+    const auto retake = retakes.find(rec.plan_index);
     // The store times itself into the record (StoreOptions::record_store_time);
     // the whole append, commit included, goes to telemetry.
     const auto store_start = Clock::now();
@@ -602,7 +702,7 @@ struct Controller::Impl {
     }
     if (control.abort_requested())
       return RunEnd{db::store::RunStatus::kAborted,
-                    faults.abort_reason("after position " + std::to_string(index))};
+                    faults.abort_reason("after position " + std::to_string(rec.plan_index))};
     return std::nullopt;
   }
 

@@ -272,6 +272,8 @@ SweepConfig replay_config(const SweepConfig& config, const RecordedRun& recorded
       replay.frames_dir.reset();
       // Saved frames are files: there is no camera to reopen.
       replay.faults.camera_reopen_timeout = std::chrono::milliseconds(0);
+      // Its bench and frames record nothing while a position is acquired.
+      replay.acquire_ahead = true;
       replay.faults.max_consecutive_failed_positions = static_cast<int>(
           std::min<std::size_t>(recorded.plan().size() + 1, std::numeric_limits<int>::max()));
       return replay;

@@ -220,6 +220,12 @@ void read_faults(Table faults, SweepConfig* c) {
   faults.reject_unknown();
 }
 
+void read_compute(Table compute, SweepConfig* c) {
+  c->compute_threads = static_cast<int>(
+      compute.integer_or("threads", default_compute_threads(), 1, FramePool::kMaxThreads));
+  compute.reject_unknown();
+}
+
 void read_target(Table target, SweepConfig* c) {
   c->target_layout_path = target.existing_file("layout", "a target layout");
   c->target = load_named(target, "layout", "a target layout (vision/target)",
@@ -528,6 +534,7 @@ nlohmann::json SweepConfig::to_json() const {
        {{"publish", telemetry.publish},
         {"control", telemetry.control},
         {"allow_remote", telemetry.allow_remote}}},
+      {"compute", {{"threads", compute_threads}}},
       {"estimators", estimators_json()},
   };
 }
@@ -541,12 +548,12 @@ SweepConfig load_sweep_config(const std::string& path) {
   Table root = file.root();
   // Unknown tables first: a misspelt [setle] must not let its defaults be checked.
   for (const char* name : {"plan", "capture", "bench", "settle", "faults", "target", "detect",
-                           "rig", "database", "telemetry", "estimator"}) {
+                           "rig", "database", "telemetry", "compute", "estimator"}) {
     root.ignore(name);
   }
   root.reject_unknown(
       "one of the tables [plan], [capture], [bench], [settle], [faults], [target], [detect], "
-      "[rig], [database], [telemetry], [[estimator]]");
+      "[rig], [database], [telemetry], [compute], [[estimator]]");
   read_bench(root.table("bench"), &c);
   c.plan = read_plan(root.table("plan"), c.bench_profile.soft_limits);
   read_capture(root.table("capture"), &c);
@@ -560,6 +567,7 @@ SweepConfig load_sweep_config(const std::string& path) {
   read_rig(rig, &c);
   read_database(root.table("database"), &c);
   read_telemetry(root.optional_table("telemetry"), &c);
+  read_compute(root.optional_table("compute"), &c);
   read_estimators(root, &c);
   // Consistency of the parts with each other.
   check_target_in_front(rig, c);

@@ -260,6 +260,27 @@ TEST(SweepConfigValid, TheCameraReopenKeysAreReadAndBounded) {
   EXPECT_NE(error2.find("faults.camera_reopen_timeout_ms = -1"), std::string::npos) << error2;
 }
 
+TEST(SweepConfigValid, TheComputeThreadsAreReadBoundedAndDefaultToTheMachinesThreads) {
+  const fs::path dir = temp_dir("compute");
+  const SweepConfig dflt =
+      rig::sweep::load_sweep_config(write_file(dir / "default.toml", valid_sweep()));
+  EXPECT_EQ(dflt.compute_threads, rig::sweep::default_compute_threads());
+  EXPECT_GE(dflt.compute_threads, 1);
+  const SweepConfig one = rig::sweep::load_sweep_config(
+      write_file(dir / "one.toml", valid_sweep() + "\n[compute]\nthreads = 1\n"));
+  EXPECT_EQ(one.compute_threads, 1);
+  EXPECT_EQ(one.to_json()["compute"]["threads"], 1);
+  for (const char* bad : {"0", "257", "1.5"}) {
+    const std::string text = valid_sweep() + "\n[compute]\nthreads = " + bad + "\n";
+    const std::string error = load_error(write_file(dir / "bad.toml", text));
+    EXPECT_NE(error.find(std::string("compute.threads = ") + bad), std::string::npos) << error;
+    EXPECT_NE(error.find("1..256"), std::string::npos) << error;
+  }
+  const std::string unknown = valid_sweep() + "\n[compute]\nthread = 2\n";
+  const std::string error = load_error(write_file(dir / "unknown.toml", unknown));
+  EXPECT_NE(error.find("compute.thread"), std::string::npos) << error;
+}
+
 TEST(SweepConfigValid, RelativePathsAreResolvedAgainstTheSweepFilesFolder) {
   const fs::path dir = temp_dir("relative");
   fs::create_directories(dir / "recorded");
@@ -431,8 +452,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"unknown_table", "[settle]", "[setle]",
                 "setle = { dwell_ms = 0 }: unknown key (misspelt?); expected one of the tables "
                 "[plan], [capture], [bench], [settle], [faults], [target], [detect], [rig], "
-                "[database], "
-                "[telemetry], [[estimator]]"},
+                "[database], [telemetry], [compute], [[estimator]]"},
         BadCase{"wrong_type", "frames_per_position = 3", "frames_per_position = \"3\"",
                 "capture.frames_per_position = \"3\": expected an integer in 1..1000"},
         BadCase{"frames_zero", "frames_per_position = 3", "frames_per_position = 0",

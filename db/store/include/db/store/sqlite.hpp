@@ -70,6 +70,9 @@ class Statement {
   std::int64_t get_int64(int column) const;
   int get_int(int column) const { return static_cast<int>(get_int64(column)); }
   std::string get_text(int column) const;
+  // The text without a copy: valid until the next step(), reset() or read
+  // of the same column as another type.
+  std::string_view get_text_view(int column) const;
   std::string get_blob(int column) const;
   // nullopt for NULL.
   std::optional<double> get_optional_double(int column) const;

@@ -4,6 +4,16 @@
 // target, compute the truth from the bench's READ-BACK position and the rig
 // geometry, store the position in one transaction, publish it.
 //
+// Frames are measured in parallel (the sweep file's [compute] threads,
+// rig::sweep::FramePool): each frame goes to the pool as it is grabbed, so
+// the frames of a position are measured while the next ones are exposed and
+// while each other is measured; the measurements are taken in frame order on
+// the controller's thread, which alone logs, publishes, runs the external
+// estimators and stores. With SweepConfig::acquire_ahead (a replay) the next
+// position is acquired (moved to, settled, its frames grabbed) before the
+// current one is finished and stored. Either way the rows stored, the events
+// and the telemetry are those of the serial path, in the same order.
+//
 // The controller knows the bench and the camera only through motion::Bench
 // and vision::FrameSource, the database only through db::store::Store.
 //

@@ -69,6 +69,11 @@
 //   control = "tcp://127.0.0.1:5557"      REP endpoint (default as shown), != publish
 //   allow_remote = false        false: endpoints must be loopback (127.x, localhost)
 //
+//   [compute]
+//   threads = 2                 1..256 (default: the machine's hardware threads):
+//                               frames measured in parallel (rig/sweep/frame_pool.hpp);
+//                               the results are the same for any value
+//
 //   [[estimator]]               zero or more external estimators (docs/external-estimators.md)
 //   name = "my_pnp"             (required) [A-Za-z0-9_.-], 1..64 characters, unique;
 //                               stored and reported as solver "ext:my_pnp"
@@ -98,6 +103,7 @@
 #include "motion/bench_url.hpp"
 #include "motion/drive_profile.hpp"
 #include "rig/estimator/external_estimator.hpp"
+#include "rig/sweep/frame_pool.hpp"
 #include "rig/sweep/sweep_plan.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "vision/camera.hpp"
@@ -207,6 +213,18 @@ struct SweepConfig {
   // position being measured; false is faster on slow disks but may lose the
   // last positions (the run then resumes from an earlier one).
   bool durable_commits = true;
+  // [compute] threads: threads that measure frames (detector and solvers,
+  // whole frames at a time; rig::sweep::FramePool). 1 measures every frame on
+  // the controller's thread; more overlap a position's frames with each other
+  // and with the capture. Results do not depend on it.
+  int compute_threads = default_compute_threads();
+  // Not a sweep-file key (replay_config sets it): the controller acquires
+  // each position (move, settle, frames) before it finishes and stores the
+  // one before, so that consecutive positions' frames are measured in
+  // parallel. Only for a bench and a frame source that record nothing while
+  // acquiring (a replay's): what is recorded, and its order, stay those of
+  // the one-at-a-time path (rig/sweep/controller.hpp).
+  bool acquire_ahead = false;
   // [[estimator]]: external estimators run on every frame beside the
   // built-in solvers, in file order (docs/external-estimators.md).
   std::vector<estimator::EstimatorSpec> estimators;

@@ -1,0 +1,92 @@
+// rig::sweep::FramePool: vision::FrameMeasurer::measure (the detector and every
+// solver on one frame) on several threads, whole frames at a time, so that the
+// frames of a position, or the next position's frames, are measured in
+// parallel while the caller keeps everything that must stay in order (logging,
+// telemetry, external estimators, the database) on its own thread.
+//
+// A frame is submitted as soon as it is grabbed and its measurement is taken
+// later, in whatever order the caller wants (the controller takes them in
+// frame order). Each measurement is exactly what measure() returns on the
+// caller's thread: measure() is a const function of the image and of the
+// measurer's immutable camera, target, detector and solvers (no shared
+// mutable state; tests/rig/sweep/frame_pool_test.cpp holds the results of 1
+// and 2 threads equal field by field). Only its detect_s and solve_s wall
+// times depend on what else runs meanwhile.
+//
+// threads = 1 is the serial path: nothing runs in the background; take()
+// measures the frame on the caller's thread. threads = N > 1 starts N - 1
+// worker threads, and a caller waiting in take() measures the frames queued
+// up to its own itself (never later ones, which would hold up what the caller
+// does next), so N threads measure at most. Frames are started in submission
+// order.
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <deque>
+#include <future>
+#include <mutex>
+#include <opencv2/core.hpp>
+#include <thread>
+#include <vector>
+
+#include "vision/frame_measurement.hpp"
+
+namespace rig::sweep {
+
+// The [compute] threads default: the machine's hardware threads, at least 1.
+int default_compute_threads();
+
+class FramePool {
+ public:
+  // A submitted frame's measurement, to be taken once with take().
+  struct Ticket {
+    std::future<vision::FrameMeasurement> measurement;
+    std::uint64_t sequence = 0;  // submission order
+  };
+
+  // Measures with `measurer`, which must outlive the pool. Precondition:
+  // 1 <= threads <= kMaxThreads (std::invalid_argument otherwise).
+  FramePool(const vision::FrameMeasurer& measurer, int threads);
+  // Waits for the frames being measured; frames still queued are dropped.
+  ~FramePool();
+  FramePool(const FramePool&) = delete;
+  FramePool& operator=(const FramePool&) = delete;
+
+  static constexpr int kMaxThreads = 256;
+
+  int threads() const { return threads_; }
+  const vision::FrameMeasurer& measurer() const { return measurer_; }
+
+  // Queues `image` (shared, not copied: the caller must not write to its
+  // pixels until the ticket is taken or dropped) for measurement.
+  Ticket submit(cv::Mat image);
+
+  // The measurement of `ticket`, waiting for it; while it waits, the caller
+  // measures the frames still queued that were submitted before it (its own
+  // included). Rethrows what measure() threw (e.g.
+  // std::invalid_argument for an image type the detector cannot read).
+  // Precondition: ticket came from this pool's submit() and was not taken.
+  // A ticket that is dropped instead is measured all the same, and the
+  // result discarded.
+  vision::FrameMeasurement take(Ticket& ticket);
+
+ private:
+  void work();
+  bool run_one_queued(std::uint64_t up_to);
+
+  const vision::FrameMeasurer& measurer_;
+  const int threads_;
+  std::mutex mutex_;
+  std::condition_variable queued_;
+  struct Job {
+    std::packaged_task<vision::FrameMeasurement()> task;
+    std::uint64_t sequence;
+  };
+  std::deque<Job> queue_;
+  std::uint64_t submitted_ = 0;
+  bool stopping_ = false;
+  std::vector<std::thread> workers_;
+};
+
+}  // namespace rig::sweep

@@ -1,0 +1,87 @@
+#include "rig/sweep/frame_pool.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace rig::sweep {
+
+int default_compute_threads() {
+  const unsigned hardware = std::thread::hardware_concurrency();  // 0 when unknown
+  return static_cast<int>(std::clamp<unsigned>(hardware, 1, FramePool::kMaxThreads));
+}
+
+FramePool::FramePool(const vision::FrameMeasurer& measurer, int threads)
+    : measurer_(measurer), threads_(threads) {
+  if (threads < 1 || threads > kMaxThreads)
+    throw std::invalid_argument("FramePool: threads = " + std::to_string(threads) +
+                                "; expected 1.." + std::to_string(kMaxThreads));
+  for (int k = 1; k < threads; ++k)
+    workers_.emplace_back([this] { work(); });
+}
+
+FramePool::~FramePool() {
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+    queue_.clear();  // their tickets report std::future_error (broken promise)
+  }
+  queued_.notify_all();
+  for (std::thread& w : workers_)
+    w.join();
+}
+
+FramePool::Ticket FramePool::submit(cv::Mat image) {
+  std::packaged_task<vision::FrameMeasurement()> task(
+      [this, image = std::move(image)] { return measurer_.measure(image); });
+  Ticket ticket{task.get_future(), 0};
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    ticket.sequence = submitted_++;
+    queue_.push_back({std::move(task), ticket.sequence});
+  }
+  queued_.notify_one();
+  return ticket;
+}
+
+vision::FrameMeasurement FramePool::take(Ticket& ticket) {
+  // The oldest queued frame first: with one thread that is the serial order.
+  std::future<vision::FrameMeasurement>& m = ticket.measurement;
+  while (m.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
+    if (!run_one_queued(ticket.sequence)) {
+      m.wait();
+      break;
+    }
+  }
+  return m.get();
+}
+
+bool FramePool::run_one_queued(std::uint64_t up_to) {
+  std::packaged_task<vision::FrameMeasurement()> task;
+  {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    if (queue_.empty() || queue_.front().sequence > up_to) return false;
+    task = std::move(queue_.front().task);
+    queue_.pop_front();
+  }
+  task();  // an exception is stored in the ticket
+  return true;
+}
+
+void FramePool::work() {
+  for (;;) {
+    std::packaged_task<vision::FrameMeasurement()> task;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      queued_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+      if (stopping_) return;
+      task = std::move(queue_.front().task);
+      queue_.pop_front();
+    }
+    task();
+  }
+}
+
+}  // namespace rig::sweep
