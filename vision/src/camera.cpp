@@ -171,12 +171,17 @@ void check_text_bytes(const std::string& path, const std::string& text) {
 }
 
 // XML: elements nest by start tags; <?...?>, <!...> and empty-element tags
-// do not open a level.
+// do not open a level. Every tag must be closed by '>': OpenCV 4.6's XML
+// reader reads past the end of its buffer on a tag that the file ends inside
+// of (a last byte '=' of an attribute, found by fuzzing).
 void check_xml_nesting(const std::string& path, const std::string& text) {
   int depth = 0, line = 1;
   for (std::size_t i = 0; i < text.size(); ++i) {
     if (text[i] == '\n') ++line;
-    if (text[i] != '<' || i + 1 >= text.size()) continue;
+    if (text[i] != '<') continue;
+    if (text.find('>', i) == std::string::npos)
+      throw CalibrationError("calibration file '" + path + "': line " + std::to_string(line) +
+                             ": the file ends inside a tag; expected '>' to close it");
     const char next = text[i + 1];
     if (next == '/') {
       if (depth > 0) --depth;
