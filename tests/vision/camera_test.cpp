@@ -48,14 +48,17 @@ TEST(Camera, ProjectMatchesCvProjectPointsTo1e9Px) {
   }
 }
 
-TEST(Camera, UndistortMatchesCvUndistortPointsTo1e9Px) {
-  const auto cam = vision::Camera::paper_default();
+// Undistorts a grid of pixels `step` apart, with an offset off the pixel
+// centres, and compares with cv::undistortPoints asked to run to
+// convergence (OpenCV's default stops after 5 fixed-point steps): both invert
+// the same model, so they agree to rounding, compared on the image (normalized
+// differences scaled by the focal length); the round trip lands on the pixel
+// within the stated tolerance.
+void expect_undistort_matches_opencv(const vision::Camera& cam, int step) {
   std::vector<cv::Point2d> pixels;
-  for (int v = 0; v < cam.height_px(); v += 10)
-    for (int u = 0; u < cam.width_px(); u += 10)
+  for (int v = 0; v < cam.height_px(); v += step)
+    for (int u = 0; u < cam.width_px(); u += step)
       pixels.emplace_back(u + 0.37, v + 0.81);
-  // OpenCV's default stops after 5 fixed-point steps; asked to run to
-  // convergence it reaches the same inverse as our Newton iteration.
   std::vector<cv::Point2d> expected;
   cv::undistortPoints(
       pixels, expected, cam.camera_matrix_cv(), cam.distortion_cv(), cv::noArray(), cv::noArray(),
@@ -64,17 +67,16 @@ TEST(Camera, UndistortMatchesCvUndistortPointsTo1e9Px) {
   for (size_t i = 0; i < pixels.size(); ++i) {
     Eigen::Vector2d xy;
     ASSERT_TRUE(cam.undistort_point({pixels[i].x, pixels[i].y}, &xy));
-    // Compared on the image: normalized differences scaled by the focal length.
     EXPECT_NEAR(k.fx * xy.x(), k.fx * expected[i].x, 1e-9);
     EXPECT_NEAR(k.fy * xy.y(), k.fy * expected[i].y, 1e-9);
-    // And the round trip lands on the pixel within the stated tolerance.
     EXPECT_LE((cam.distort_normalized(xy) - Eigen::Vector2d(pixels[i].x, pixels[i].y)).norm(),
               vision::Camera::kUndistortTolerancePx);
   }
 }
 
-TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
-  const auto cam = vision::Camera::paper_default();
+// The distortion Jacobian against central differences at two points.
+// Truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px: 1e-5.
+void expect_distort_jacobian_matches_finite_differences(const vision::Camera& cam) {
   const double h = 1e-7;
   for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0.3, -0.2), Eigen::Vector2d(-0.5, 0.35)}) {
     const Eigen::Matrix2d J = cam.distort_jacobian(xy);
@@ -83,11 +85,18 @@ TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
       d(k) = h;
       const Eigen::Vector2d numeric =
           (cam.distort_normalized(xy + d) - cam.distort_normalized(xy - d)) / (2 * h);
-      // Central differences: truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px.
       EXPECT_NEAR(J(0, k), numeric.x(), 1e-5);
       EXPECT_NEAR(J(1, k), numeric.y(), 1e-5);
     }
   }
+}
+
+TEST(Camera, UndistortMatchesCvUndistortPointsTo1e9Px) {
+  expect_undistort_matches_opencv(vision::Camera::paper_default(), 10);
+}
+
+TEST(Camera, DistortJacobianMatchesFiniteDifferences) {
+  expect_distort_jacobian_matches_finite_differences(vision::Camera::paper_default());
 }
 
 // The paper's camera with thin-prism terms ten times those of the simulated
@@ -126,43 +135,12 @@ TEST(Camera, ThinPrismProjectMatchesCvProjectPointsWithTwelveCoefficients) {
 }
 
 TEST(Camera, ThinPrismUndistortMatchesCvUndistortPoints) {
-  const auto cam = thin_prism_camera();
-  std::vector<cv::Point2d> pixels;
-  for (int v = 0; v < cam.height_px(); v += 15)
-    for (int u = 0; u < cam.width_px(); u += 15)
-      pixels.emplace_back(u + 0.37, v + 0.81);
-  std::vector<cv::Point2d> expected;
-  cv::undistortPoints(
-      pixels, expected, cam.camera_matrix_cv(), cam.distortion_cv(), cv::noArray(), cv::noArray(),
-      cv::TermCriteria(cv::TermCriteria::COUNT | cv::TermCriteria::EPS, 1000, 1e-16));
-  const auto& k = cam.intrinsics();
-  for (size_t i = 0; i < pixels.size(); ++i) {
-    Eigen::Vector2d xy;
-    ASSERT_TRUE(cam.undistort_point({pixels[i].x, pixels[i].y}, &xy));
-    // Both invert the same model to convergence: rounding, compared on the image.
-    EXPECT_NEAR(k.fx * xy.x(), k.fx * expected[i].x, 1e-9);
-    EXPECT_NEAR(k.fy * xy.y(), k.fy * expected[i].y, 1e-9);
-    EXPECT_LE((cam.distort_normalized(xy) - Eigen::Vector2d(pixels[i].x, pixels[i].y)).norm(),
-              vision::Camera::kUndistortTolerancePx);
-  }
+  expect_undistort_matches_opencv(thin_prism_camera(), 15);
 }
 
+// A missing prism term would put the Jacobian off by 2 s1 x fx ~ 0.4 px.
 TEST(Camera, ThinPrismDistortJacobianMatchesFiniteDifferences) {
-  const auto cam = thin_prism_camera();
-  const double h = 1e-7;
-  for (const Eigen::Vector2d& xy : {Eigen::Vector2d(0.3, -0.2), Eigen::Vector2d(-0.5, 0.35)}) {
-    const Eigen::Matrix2d J = cam.distort_jacobian(xy);
-    for (int k = 0; k < 2; ++k) {
-      Eigen::Vector2d d = Eigen::Vector2d::Zero();
-      d(k) = h;
-      const Eigen::Vector2d numeric =
-          (cam.distort_normalized(xy + d) - cam.distort_normalized(xy - d)) / (2 * h);
-      // Central differences: truncation ~h^2 * f ~ 1e-11, rounding ~1e-16 * 700 / h ~ 1e-6 px;
-      // a missing prism term would be off by 2 s1 x fx ~ 0.4 px.
-      EXPECT_NEAR(J(0, k), numeric.x(), 1e-5);
-      EXPECT_NEAR(J(1, k), numeric.y(), 1e-5);
-    }
-  }
+  expect_distort_jacobian_matches_finite_differences(thin_prism_camera());
 }
 
 class CalibrationFiles : public ::testing::Test {

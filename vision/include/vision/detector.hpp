@@ -79,13 +79,11 @@ struct DetectorParameters {
   // 1: the candidate steps 1-7 run on the full image. 2: on the image
   // reduced by cv::pyrDown (whose 5x5 Gaussian then serves as Canny's
   // smoothing stage instead of canny_sigma_px), like AprilTag's
-  // quad_decimate: steps 1-7 take about a third of the time (the whole
-  // detector 0.85 instead of 1.5 ms per 736x571 frame in bench_detector),
-  // and the sub-pixel sides and the code are still read on the full image,
-  // so the corners do not change. The cost: outlines of markers under ~25 px
-  // a side merge with their code edges at half resolution and are lost
-  // sooner. All sizes here stay in full-resolution pixels (the kernels below
-  // are halved, rounded up to odd).
+  // quad_decimate: steps 1-7 take about a third of the time (bench_detector
+  // times the whole detector; scripts/perf_table), and the sub-pixel sides and the code are still
+  // read on the full image, so the corners do not change. The cost: outlines of markers under ~25
+  // px a side merge with their code edges at half resolution and are lost sooner. All sizes here
+  // stay in full-resolution pixels (the kernels below are halved, rounded up to odd).
   int candidate_decimation = 2;
 
   // Side of the Gaussian kernel that smooths the edge map (paper step 2),
