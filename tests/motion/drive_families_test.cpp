@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "drive_emulator.hpp"
 #include "motion/drive_profile.hpp"
 #include "motion/errors.hpp"
 #include "motion/two_drive_bench.hpp"
@@ -36,15 +37,10 @@
 namespace {
 
 using namespace std::chrono_literals;
+using motion_test::kEmulatorStart;
+using motion_test::kExact;
+using motion_test::kSettle;
 using rig_test::ChildProcess;
-
-constexpr double kExact = 1e-9;  // mm, see the header
-// Starting the Python emulator takes well under a second; this bounds a broken one.
-constexpr auto kStart = 20s;
-// Moves here are at most 100 mm at 100 mm/s (1 s); homing from 5 mm takes
-// 0.25 s (PCON, 20 mm/s) or 0.05 s (AZ, 10 kHz). 5 s bounds a broken test,
-// with room for a loaded host.
-constexpr auto kSettle = 5s;
 
 // What the test needs of one family: its profile, its map and its alarms.
 struct Family {
@@ -88,7 +84,7 @@ class DriveFamily : public ::testing::TestWithParam<Family> {
         "--family", family().name};
     argv.insert(argv.end(), args.begin(), args.end());
     drives_ = std::make_unique<ChildProcess>(argv);
-    const auto line = drives_->read_line(kStart);
+    const auto line = drives_->read_line(kEmulatorStart);
     ASSERT_TRUE(line && line->rfind("PORT ", 0) == 0)
         << "drive-family emulator did not start (python3-pymodbus installed?)";
     port_ = std::stoi(line->substr(5));
@@ -331,7 +327,7 @@ TEST(DriveFamilyRtu, TheAzPairIsDrivenOverRtuThroughAPtyPair) {
                          std::string(RIG_SOURCE_DIR) + "/tests/motion/drive_families.py",
                          "--family", "az", "--rtu", dir + "/drives", "--baud", "115200", "--parity",
                          "N", "--stop", "1"});
-    const auto line = drives.read_line(kStart);
+    const auto line = drives.read_line(kEmulatorStart);
     ASSERT_TRUE(line && *line == "READY") << "drive-family emulator did not start over RTU";
     const motion::DriveProfile profile = motion::load_drive_profile(
         std::string(RIG_SOURCE_DIR) + "/config/benches/oriental_az_two_axes.toml");

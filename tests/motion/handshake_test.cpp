@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "drive_emulator.hpp"
 #include "motion/drive_profile.hpp"
 #include "motion/errors.hpp"
 #include "motion/modbus_bench.hpp"
@@ -24,14 +25,11 @@
 namespace {
 
 using namespace std::chrono_literals;
+using motion_test::kEmulatorStart;
+using motion_test::kExact;
+using motion_test::kSettle;
 using rig_test::ChildProcess;
 
-constexpr double kExact = 1e-9;  // mm, see the header
-// Starting the Python emulator takes well under a second; this bounds a broken one.
-constexpr auto kStart = 20s;
-// Moves here are at most ~80 mm at 200 mm/s (0.4 s), homing at 100 mm/s from
-// (20, 20) mm (0.2 s); 5 s bounds a broken test, with room for a loaded host.
-constexpr auto kSettle = 5s;
 // The emulator's control and status registers (handshake_drive.py).
 constexpr int kControl = 0x105;
 constexpr std::uint16_t kSon = 0x10;
@@ -44,7 +42,7 @@ class HandshakeDrive : public ::testing::Test {
         "/usr/bin/python3", std::string(RIG_SOURCE_DIR) + "/tests/motion/handshake_drive.py", "0"};
     argv.insert(argv.end(), args.begin(), args.end());
     drive_ = std::make_unique<ChildProcess>(argv);
-    const auto line = drive_->read_line(kStart);
+    const auto line = drive_->read_line(kEmulatorStart);
     ASSERT_TRUE(line && line->rfind("PORT ", 0) == 0)
         << "handshake emulator did not start (python3-pymodbus installed?)";
     port_ = std::stoi(line->substr(5));

@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "child_process.hpp"
+#include "drive_emulator.hpp"
 #include "motion/drive_profile.hpp"
 #include "motion/errors.hpp"
 #include "motion/two_drive_bench.hpp"
@@ -29,14 +30,10 @@
 namespace {
 
 using namespace std::chrono_literals;
+using motion_test::kEmulatorStart;
+using motion_test::kExact;
+using motion_test::kSettle;
 using rig_test::ChildProcess;
-
-constexpr double kExact = 1e-9;  // mm, see the header
-// Starting the Python emulator takes well under a second; this bounds a broken one.
-constexpr auto kStart = 20s;
-// The longest move here is 150 mm at 100 mm/s (1.5 s); homing runs at 100 mm/s
-// from 20 mm (0.2 s). 5 s bounds a broken test, with room for a loaded host.
-constexpr auto kSettle = 5s;
 
 std::string profile_path() {
   return std::string(RIG_SOURCE_DIR) + "/tests/motion/axis_drives.toml";
@@ -50,7 +47,7 @@ class TwoDrives : public ::testing::Test {
                                      std::string(RIG_SOURCE_DIR) + "/tests/motion/axis_drives.py"};
     argv.insert(argv.end(), args.begin(), args.end());
     drives_ = std::make_unique<ChildProcess>(argv);
-    const auto line = drives_->read_line(kStart);
+    const auto line = drives_->read_line(kEmulatorStart);
     ASSERT_TRUE(line && line->rfind("PORTS ", 0) == 0)
         << "two-drive emulator did not start (python3-pymodbus installed?)";
     std::istringstream ports(line->substr(6));

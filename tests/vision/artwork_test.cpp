@@ -11,18 +11,13 @@
 #include <sstream>
 #include <string>
 
+#include "file_bytes.hpp"
+
 namespace vision {
 namespace {
 
 std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / ("rig_artwork_test_" + name)).string();
-}
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 constexpr double kPtPerMm = 72.0 / 25.4;
@@ -35,7 +30,7 @@ constexpr double kPageMm = 50.0 * 8 / 6;
 TEST(Artwork, SvgMarkerPageHasTheTruePhysicalSize) {
   const std::string path = temp_path("marker.svg");
   write_marker_artwork(Codebook(), 3, MarkerArtworkOptions{}, path);
-  const std::string svg = slurp(path);
+  const std::string svg = rig_test::file_bytes(path);
   std::smatch m;
   ASSERT_TRUE(std::regex_search(svg, m, std::regex("width=\"([0-9.]+)pt\" height=\"([0-9.]+)pt\"")))
       << svg.substr(0, 300);
@@ -49,7 +44,7 @@ TEST(Artwork, PdfMarkerPageHasTheTruePhysicalSize) {
   o.side_mm = 80;
   o.quiet_cells = 2;
   write_marker_artwork(Codebook(), 0, o, path);
-  const std::string pdf = slurp(path);
+  const std::string pdf = rig_test::file_bytes(path);
   ASSERT_EQ(pdf.rfind("%PDF", 0), 0u);
   std::smatch m;
   ASSERT_TRUE(std::regex_search(pdf, m, std::regex("/MediaBox \\[ *0 0 ([0-9.]+) ([0-9.]+) *\\]")));
@@ -150,7 +145,7 @@ TEST(Artwork, A3SheetPdfHasTheA3Size) {
   const std::string path = temp_path("a3.pdf");
   write_target_artwork(Codebook(), target, TargetArtworkOptions{}, path);
   std::smatch m;
-  const std::string pdf = slurp(path);
+  const std::string pdf = rig_test::file_bytes(path);
   ASSERT_TRUE(std::regex_search(pdf, m, std::regex("/MediaBox \\[ *0 0 ([0-9.]+) ([0-9.]+) *\\]")));
   EXPECT_NEAR(std::stod(m[1]) / kPtPerMm, 297, 0.01);
   EXPECT_NEAR(std::stod(m[2]) / kPtPerMm, 420, 0.01);

@@ -24,6 +24,7 @@
 #include <thread>
 #include <vector>
 
+#include "camera_frames.hpp"
 #include "gvsp_loss_relay.hpp"
 #include "vision/frame_source.hpp"
 #include "vision/gige_source.hpp"
@@ -32,11 +33,12 @@ extern char** environ;
 
 namespace {
 
+using rig_test::kFrameWait;
+
 using namespace std::chrono_literals;
 
 constexpr const char* kSerial = "RIGTEST";
 constexpr const char* kAddress = "127.0.0.1";
-constexpr auto kFrameWait = 10s;
 
 // The simulator process, started at kAddress and killed at the end of the test.
 class FakeCameraProcess {

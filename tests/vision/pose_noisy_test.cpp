@@ -23,7 +23,7 @@
 
 namespace {
 
-constexpr int kProblems = 1000;
+constexpr int kNoisyProblems = 1000;
 constexpr double kNoisePx = 0.5;
 constexpr double kStandardErrors = 5.5;
 
@@ -44,7 +44,7 @@ const Results& results() {
     auto solvers = vision::make_all_solvers();
     for (const auto& s : solvers)
       out.names.push_back(s->name());
-    for (int k = 0; k < kProblems; ++k) {
+    for (int k = 0; k < kNoisyProblems; ++k) {
       const auto p = rig_test::draw_problem(camera, spec, rng);
       const auto c = vision::make_correspondences(camera, p.object_points, p.image_points_px);
       const double truth = p.T_cam_target.t.norm();
@@ -110,7 +110,7 @@ TEST(PoseSolversNoisy, TableAgainstOpenCvIppeSquare) {
     if (name != "ekf") {
       // Every solver but the fixed-prior EKF converges on nearly every
       // problem; the 1 % allowance covers OI's near-frontal crawl.
-      EXPECT_GE(n, kProblems * 99 / 100) << name;
+      EXPECT_GE(n, kNoisyProblems * 99 / 100) << name;
     }
   }
 }

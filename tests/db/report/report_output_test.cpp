@@ -8,19 +8,13 @@
 #include <sstream>
 
 #include "db/report/report.hpp"
+#include "file_bytes.hpp"
 #include "report_document.hpp"
 #include "store_fixture.hpp"
 #include "svg_detail.hpp"
 #include "synthetic_run.hpp"
 
 namespace {
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 class ReportOutput : public ::testing::Test {
  protected:
@@ -38,8 +32,8 @@ class ReportOutput : public ::testing::Test {
 TEST_F(ReportOutput, WritesHtmlJsonAndCsvThatAgree) {
   const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{});
   const db::report::ReportFiles files = report.write(dir_.file("out"));
-  const std::string html = slurp(files.html);
-  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const std::string html = rig_test::file_bytes(files.html);
+  const nlohmann::json json = nlohmann::json::parse(rig_test::file_bytes(files.json));
 
   // Every figure of the JSON is on the page, and the paper's figures are there.
   ASSERT_TRUE(json["figures"].is_array());
@@ -60,7 +54,8 @@ TEST_F(ReportOutput, WritesHtmlJsonAndCsvThatAgree) {
   // Every table is a CSV file whose first line is the table's header.
   ASSERT_EQ(files.csv.size(), json["tables"].size());
   for (const auto& t : json["tables"]) {
-    const std::string csv = slurp(dir_.file("out/" + t["id"].get<std::string>() + ".csv"));
+    const std::string csv =
+        rig_test::file_bytes(dir_.file("out/" + t["id"].get<std::string>() + ".csv"));
     std::string header;
     for (const auto& h : t["header"])
       header += (header.empty() ? "" : ",") + h.get<std::string>();
@@ -101,7 +96,7 @@ TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
   const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{},
                                   db::report::RunReference::parse(dir_.file("baseline.db")));
   const db::report::ReportFiles files = report.write(dir_.file("out"));
-  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json json = nlohmann::json::parse(rig_test::file_bytes(files.json));
   ASSERT_TRUE(json.contains("baseline"));
   EXPECT_FALSE(json["comparison"].empty());
   for (const auto& f : json["figures"]) {
@@ -110,7 +105,7 @@ TEST_F(ReportOutput, DrawsTheBaselineBesideEveryFigure) {
       baseline |= s["label"].get<std::string>().find("baseline") != std::string::npos;
     EXPECT_TRUE(baseline) << f["id"];
   }
-  EXPECT_NE(slurp(files.html).find("Against the baseline"), std::string::npos);
+  EXPECT_NE(rig_test::file_bytes(files.html).find("Against the baseline"), std::string::npos);
   EXPECT_TRUE(std::filesystem::exists(dir_.file("out/comparison.csv")));
 }
 
@@ -121,7 +116,7 @@ TEST_F(ReportOutput, ComparisonVerdictsFollowFromTheJson) {
   const db::report::Report report(dir_.file("run.db"), db::report::ReportOptions{},
                                   db::report::RunReference::parse(dir_.file("baseline.db")));
   const db::report::ReportFiles files = report.write(dir_.file("out"));
-  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json json = nlohmann::json::parse(rig_test::file_bytes(files.json));
   const nlohmann::json* table = nullptr;
   for (const auto& t : json["tables"])
     if (t["id"] == "comparison") table = &t;
@@ -179,7 +174,7 @@ TEST(ReportEfficiency, NeverDrawsASolverBelowTheCramerRaoBound) {
   rig_test::write_synthetic_run(dir.file("run.db"), spec);
   const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
   const db::report::ReportFiles files = report.write(dir.file("out"));
-  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json json = nlohmann::json::parse(rig_test::file_bytes(files.json));
 
   const db::report::SolverStudy* below = report.study().find("hybrid_oi", "0");
   const db::report::SolverStudy* above = report.study().find("ippe", "0");

@@ -11,6 +11,7 @@
 
 #include "db/report/report.hpp"
 #include "db/stats/descriptive.hpp"
+#include "file_bytes.hpp"
 #include "store_fixture.hpp"
 
 namespace {
@@ -83,13 +84,6 @@ void write_run(const std::string& path, bool record_pose) {
   store.finish_run(run, db::store::RunStatus::kCompleted, "");
 }
 
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
-
 // Rounding: t_est - t_true recovers the written error to a few ulp of |t|
 // (< 1 m: 1e-15 m); the rotation angle comes from acos((trace - 1) / 2),
 // whose rounding of ~1e-15 in the cosine is ~1e-15 / sin(0.3 deg) = 2e-13 rad.
@@ -132,10 +126,10 @@ TEST(ReportPoseErrors, GiveEachAxisAndTheRotationErrorOfKnownPosesPerClass) {
 
   // The page has the table and the figures; report.json keeps SI (radians).
   const db::report::ReportFiles files = report.write(dir.file("out"));
-  const std::string html = slurp(files.html);
+  const std::string html = rig_test::file_bytes(files.html);
   for (const char* id : {"pose-errors-0", "pose-x-0", "pose-y-0", "pose-z-0", "pose-rotation-0"})
     EXPECT_NE(html.find(std::string("id=\"") + id + "\""), std::string::npos) << id;
-  const nlohmann::json json = nlohmann::json::parse(slurp(files.json));
+  const nlohmann::json json = nlohmann::json::parse(rig_test::file_bytes(files.json));
   EXPECT_TRUE(json["study"]["true_poses_recorded"].get<bool>());
   const auto& c0 = json["study"]["solvers"][0]["classes"][0]["pose_error"];
   EXPECT_NEAR(c0["rotation_rad"]["mean"].get<double>(), kRotationErrorDeg * M_PI / 180.0, 1e-11);
@@ -151,7 +145,7 @@ TEST(ReportPoseErrors, AreLeftOutWhenTheRunHasNoTruePoses) {
   const db::report::Report report(dir.file("run.db"), db::report::ReportOptions{});
   EXPECT_FALSE(report.study().true_poses_recorded);
   EXPECT_EQ(report.study().find("lm", "0")->classes[0].rotation_error_deg.count, 0u);
-  const std::string html = slurp(report.write(dir.file("out")).html);
+  const std::string html = rig_test::file_bytes(report.write(dir.file("out")).html);
   EXPECT_EQ(html.find("id=\"pose-errors-0\""), std::string::npos);
   EXPECT_NE(html.find("not recorded (runs before schema 4)"), std::string::npos);
 }

@@ -12,6 +12,7 @@
 
 #include "db/report/report.hpp"
 #include "db/store/store.hpp"
+#include "file_bytes.hpp"
 #include "report_units.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_run.hpp"
@@ -20,13 +21,6 @@ namespace {
 
 using db::report::DisplayUnit;
 using db::report::Quantity;
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 TEST(ReportUnits, PicksTheUnitAndDecimalsFromTheColumnsLargestValue) {
   // 2.8 mm: mm with 3 decimals (four significant digits of the largest).
@@ -82,7 +76,7 @@ class ReportSummary : public ::testing::Test {
   }
   std::string page(const std::string& db) {
     const db::report::Report report(db, db::report::ReportOptions{});
-    return slurp(report.write(dir_.file("out")).html);
+    return rig_test::file_bytes(report.write(dir_.file("out")).html);
   }
   db_test::ScratchDir dir_;
 };
@@ -162,10 +156,11 @@ TEST_F(ReportSummary, ListsCoincidingSolversOnce) {
   ASSERT_NE(copy, nullptr);
   EXPECT_EQ(copy->coincides_with, "hybrid_oi");
   EXPECT_TRUE(report.study().find("ekf", "0")->coincides_with.empty());
-  const std::string html = slurp(report.write(dir_.file("out")).html);
+  const std::string html = rig_test::file_bytes(report.write(dir_.file("out")).html);
   EXPECT_NE(html.find("Coinciding solvers, listed and drawn once: hybrid_oi = hybrid_oi_copy"),
             std::string::npos);
-  const nlohmann::json json = nlohmann::json::parse(slurp(dir_.file("out/report.json")));
+  const nlohmann::json json =
+      nlohmann::json::parse(rig_test::file_bytes(dir_.file("out/report.json")));
   for (const auto& f : json["figures"])
     for (const auto& s : f["series"])
       EXPECT_EQ(s["label"].get<std::string>().rfind("hybrid_oi_copy", 0), std::string::npos)

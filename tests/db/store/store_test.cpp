@@ -337,8 +337,6 @@ TEST_F(StoreTest, FailsAnAppendWhileAnotherConnectionHoldsTheWriteLock) {
   EXPECT_EQ(store_.completed_position_indices(run), std::vector<std::int64_t>{0});
 }
 
-}  // namespace
-
 TEST_F(StoreTest, RecordsARunsEventsInOrderWithTheirPositions) {
   const std::int64_t run = store_.start_run(make_run_description(5));
   const std::int64_t other = store_.start_run(make_run_description(5));
@@ -373,3 +371,5 @@ TEST(StoreTiming, RecordsTheStoresOwnTimeAsTheLastStageWhenAsked) {
   EXPECT_GT(back.stage_times.back().seconds, 0.0);
   EXPECT_LT(back.stage_times.back().seconds, 1.0);
 }
+
+}  // namespace

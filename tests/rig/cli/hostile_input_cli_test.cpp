@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 using rig_test::RigRun;
 using rig_test::run_rig;
 
-const std::string kSample = std::string(RIG_SOURCE_DIR) + "/config/problems/paper_marker.json";
+const std::string kSampleProblem =
+    std::string(RIG_SOURCE_DIR) + "/config/problems/paper_marker.json";
 
 class HostileInput : public ::testing::Test {
  protected:
@@ -49,7 +50,7 @@ std::string nested(int depth, const std::string& inner) {
 
 // The sample problem as text with `key`'s value replaced by `value_text`.
 std::string sample_with(const std::string& key, const std::string& value_text) {
-  std::ifstream in(kSample);
+  std::ifstream in(kSampleProblem);
   nlohmann::json j = nlohmann::json::parse(in);
   j[key] = "@VALUE@";
   std::string text = j.dump();
@@ -71,7 +72,7 @@ TEST_F(HostileInput, SolveRefusesAProblemNestedOneHundredThousandDeep) {
 }
 
 TEST_F(HostileInput, SolveNamesTheProblemOfANumberBeyondADouble) {
-  std::ifstream in(kSample);
+  std::ifstream in(kSampleProblem);
   std::string text((std::istreambuf_iterator<char>(in)), {});
   nlohmann::json j = nlohmann::json::parse(text);
   j["camera"]["fy"] = "@FY@";

@@ -32,6 +32,7 @@
 #include <thread>
 #include <vector>
 
+#include "file_bytes.hpp"
 #include "sim/scene/renderer.hpp"
 #include "synthetic_run.hpp"
 
@@ -44,10 +45,6 @@ using namespace std::chrono_literals;
 
 const std::string kConfig = std::string(RIG_SOURCE_DIR) + "/config";
 
-std::string slurp(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
-}
 void spill(const fs::path& path, const std::string& bytes) {
   std::ofstream(path, std::ios::binary | std::ios::trunc) << bytes;
 }
@@ -95,7 +92,7 @@ Outcome run_rig(const std::vector<std::string>& args, const fs::path& err_file) 
   }
   o.signalled = !o.hung && WIFSIGNALED(status);
   if (WIFEXITED(status)) o.exit_code = WEXITSTATUS(status);
-  o.err = slurp(err_file);
+  o.err = rig_test::file_bytes(err_file);
   return o;
 }
 
@@ -276,11 +273,11 @@ class MutatedInputs : public ::testing::Test {
 TEST_F(MutatedInputs, SweepFileDriveProfileAndPlanCsvEndInADocumentedExitNamingTheFile) {
   const fs::path profile = dir_ / "profile.toml", plan = dir_ / "plan.csv",
                  camera = dir_ / "camera.yaml", sweep = dir_ / "sweep.toml";
-  const std::string profile_text = slurp(kConfig + "/benches/sim.toml");
-  const std::string plan_text = slurp(kConfig + "/plans/example.csv");
+  const std::string profile_text = rig_test::file_bytes(kConfig + "/benches/sim.toml");
+  const std::string plan_text = rig_test::file_bytes(kConfig + "/plans/example.csv");
   spill(profile, profile_text);
   spill(plan, plan_text);
-  spill(camera, slurp(kConfig + "/cameras/sony_xc555.yaml"));
+  spill(camera, rig_test::file_bytes(kConfig + "/cameras/sony_xc555.yaml"));
   const std::string sweep_text =
       "[plan]\nkind = \"csv\"\nfile = \"" + plan.string() +
       "\"\n\n[capture]\ncamera = \"gige:127.0.0.1\"\ncalibration = \"" + camera.string() +
@@ -334,10 +331,10 @@ TEST_F(MutatedInputs, CalibrationProblemAndImagesEndInADocumentedExitNamingTheFi
   ASSERT_TRUE(cv::imwrite(png.string(), frame));
   ASSERT_TRUE(cv::imwrite(pgm.string(), frame));
   ASSERT_TRUE(cv::imwrite(good.string(), frame));
-  const std::string png_bytes = slurp(png), pgm_bytes = slurp(pgm);
+  const std::string png_bytes = rig_test::file_bytes(png), pgm_bytes = rig_test::file_bytes(pgm);
   const fs::path camera = dir_ / "camera.yaml", problem = dir_ / "problem.json";
-  const std::string camera_text = slurp(kConfig + "/cameras/sony_xc555.yaml");
-  const std::string problem_text = slurp(kConfig + "/problems/paper_marker.json");
+  const std::string camera_text = rig_test::file_bytes(kConfig + "/cameras/sony_xc555.yaml");
+  const std::string problem_text = rig_test::file_bytes(kConfig + "/problems/paper_marker.json");
 
   Mutator m(20101117);
   for (int i = 0; i < 50; ++i) {
@@ -378,7 +375,7 @@ TEST_F(MutatedInputs, ARunDatabaseEndsInADocumentedExitNamingTheFile) {
   spec.frames_per_position = 2;
   spec.solvers = rig_test::paper_like_solvers();
   rig_test::write_synthetic_run(original.string(), spec);
-  const std::string bytes = slurp(original);
+  const std::string bytes = rig_test::file_bytes(original);
   const std::vector<std::string> args = {"report", db.string(), "--out", (dir_ / "out").string()};
   spill(db, bytes);
   const Outcome valid = run_rig(args, dir_ / "stderr.txt");

@@ -8,7 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "file_bytes.hpp"
 #include "rig_command.hpp"
+#include "store_fixture.hpp"
 #include "synthetic_run.hpp"
 
 namespace {
@@ -17,29 +19,7 @@ namespace fs = std::filesystem;
 using rig_test::RigRun;
 using rig_test::run_rig;
 
-class Scratch {
- public:
-  Scratch() {
-    std::string pattern = (fs::temp_directory_path() / "rig-report-cli-XXXXXX").string();
-    if (mkdtemp(pattern.data()) == nullptr) throw std::runtime_error("mkdtemp failed");
-    path_ = pattern;
-  }
-  ~Scratch() {
-    std::error_code ignored;
-    fs::remove_all(path_, ignored);
-  }
-  std::string file(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
+using Scratch = db_test::ScratchDir;
 
 rig_test::SyntheticRunSpec spec(std::uint64_t seed) {
   rig_test::SyntheticRunSpec s;
@@ -54,13 +34,14 @@ TEST(RigReport, WritesHtmlJsonAndCsvTables) {
   rig_test::write_synthetic_run(dir.file("run.db"), spec(1));
   const RigRun r = run_rig("report " + dir.file("run.db") + " --out " + dir.file("out"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string html = slurp(dir.file("out/report.html"));
+  const std::string html = rig_test::file_bytes(dir.file("out/report.html"));
   EXPECT_EQ(html.rfind("<!doctype html>", 0), 0u) << html.substr(0, 40);
   EXPECT_NE(html.find("<svg"), std::string::npos);
-  const auto json = nlohmann::json::parse(slurp(dir.file("out/report.json")));
+  const auto json = nlohmann::json::parse(rig_test::file_bytes(dir.file("out/report.json")));
   EXPECT_GT(json["figures"].size(), 10u);
   for (const auto& t : json["tables"]) {
-    const std::string csv = slurp(dir.file("out/" + t["id"].get<std::string>() + ".csv"));
+    const std::string csv =
+        rig_test::file_bytes(dir.file("out/" + t["id"].get<std::string>() + ".csv"));
     ASSERT_FALSE(csv.empty()) << t["id"];
     EXPECT_EQ(csv.substr(0, csv.find(',')), t["header"][0].get<std::string>());
   }
@@ -104,7 +85,7 @@ TEST(RigReport, RefusesArgumentsThatCannotGiveWhatWasAsked) {
   EXPECT_EQ(onto_file.exit_code, 2) << onto_file.err;
   EXPECT_NE(onto_file.err.find(dir.file("notes.txt")), std::string::npos) << onto_file.err;
   EXPECT_NE(onto_file.err.find("existing file"), std::string::npos) << onto_file.err;
-  EXPECT_EQ(slurp(dir.file("notes.txt")), "keep me");
+  EXPECT_EQ(rig_test::file_bytes(dir.file("notes.txt")), "keep me");
 }
 
 // Exit code 3 only with --fail-on-regression and only when a solver got

@@ -15,6 +15,7 @@
 
 #include "db/store/sha256.hpp"
 #include "db/store/store.hpp"
+#include "file_bytes.hpp"
 #include "rig/sweep/ground_truth.hpp"
 #include "rig_command.hpp"
 #include "store_fixture.hpp"
@@ -27,13 +28,6 @@ using rig_test::RigRun;
 using rig_test::run_rig;
 
 using Scratch = db_test::ScratchDir;
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 // The simulated rig's nominal geometry, and one 1.5 mm and a few tenths of a
 // degree away from it, as a calibration would move it.
@@ -56,7 +50,7 @@ void write_run(const std::string& db, const std::string& geometry_path, std::uin
   d.plan_json = "{\"kind\":\"grid\"}";
   d.plan_size = 27;
   d.sweep_file = {"sweep.toml", "# test\n", ""};
-  d.rig_geometry = {geometry_path, slurp(geometry_path), ""};
+  d.rig_geometry = {geometry_path, rig_test::file_bytes(geometry_path), ""};
   d.software_version = "test";
   d.library_versions_json = "{}";
   d.host = "test";
@@ -112,7 +106,7 @@ void write_run(const std::string& db, const std::string& geometry_path, std::uin
 json report_json(const Scratch& dir, const std::string& args, const std::string& out) {
   const RigRun r = run_rig("report " + args + " --out " + dir.file(out));
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  return json::parse(slurp(dir.file(out + "/report.json")));
+  return json::parse(rig_test::file_bytes(dir.file(out + "/report.json")));
 }
 
 // What depends on the truth: every solver's figures, the detection figures.
@@ -140,7 +134,7 @@ TEST(RigReportGeometry, RecomputedTruthEqualsTheRunRecordedUnderThatGeometry) {
   EXPECT_EQ(truth["files"][0]["role"], "rig geometry");
   EXPECT_EQ(truth["files"][0]["path"], b);
   EXPECT_EQ(truth["files"][0]["sha256"], db::store::sha256_hex(kGeometryB));
-  const std::string html = slurp(dir.file("a_as_b/report.html"));
+  const std::string html = rig_test::file_bytes(dir.file("a_as_b/report.html"));
   EXPECT_NE(html.find("recomputed from the read-backs with rig geometry " + b + " (sha256 " +
                       db::store::sha256_hex(kGeometryB).substr(0, 12) + ")"),
             std::string::npos);
@@ -157,7 +151,7 @@ TEST(RigReportGeometry, ACalibrationFileIsNamedWithItsHash) {
   const json& files = j["study"]["truth"]["files"];
   ASSERT_EQ(files.size(), 2u);
   EXPECT_EQ(files[1]["role"], "camera calibration");
-  EXPECT_EQ(files[1]["sha256"], db::store::sha256_hex(slurp(camera)));
+  EXPECT_EQ(files[1]["sha256"], db::store::sha256_hex(rig_test::file_bytes(camera)));
 }
 
 TEST(RigReportGeometry, ErrorsNameTheFileAndTheKey) {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "file_bytes.hpp"
 #include "sim_rig_fixture.hpp"
 
 namespace {
@@ -25,11 +26,6 @@ using rig_test::SweepFileOptions;
 
 const std::string kExample = rig_test::repo_path("examples/solvepnp_estimator.py");
 const std::string kScripted = rig_test::repo_path("tests/rig/estimator/scripted_estimator.py");
-
-std::string file_text(const std::string& path) {
-  std::ifstream in(path);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
 
 // A sweep file of `rig` with `estimators` ([[estimator]] tables) appended.
 std::string write_sweep(const SimRig& rig, SweepFileOptions o, const std::string& estimators,
@@ -96,10 +92,11 @@ TEST(EstimatorSweep, ExampleEstimatorRunsLiveAndInReplayBesideTheBuiltInSolvers)
   const rig_test::RigRun report =
       rig_test::run_rig("report " + rig.database() + " --run 2 --out " + rig.file("report"));
   ASSERT_EQ(report.exit_code, 0) << report.out << report.err;
-  const std::string html = file_text(rig.file("report") + "/report.html");
+  const std::string html = rig_test::file_bytes(rig.file("report") + "/report.html");
   EXPECT_NE(html.find("ext:opencv_pnp"), std::string::npos);
   EXPECT_NE(html.find("ippe"), std::string::npos);
-  const auto json = nlohmann::json::parse(file_text(rig.file("report") + "/report.json"));
+  const auto json =
+      nlohmann::json::parse(rig_test::file_bytes(rig.file("report") + "/report.json"));
   EXPECT_NE(json.dump().find("\"ext:opencv_pnp\""), std::string::npos);
 }
 

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "file_bytes.hpp"
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -29,12 +31,6 @@ class FrameFiles : public ::testing::Test {
     std::error_code ignored;
     fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::add, ignored);
     fs::remove_all(dir_, ignored);
-  }
-  static std::string slurp(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream out;
-    out << in.rdbuf();
-    return out.str();
   }
   fs::path dir_;
 };
@@ -69,18 +65,18 @@ TEST_F(FrameFiles, APlantedLinkIsNeitherFollowedNorReplacedAndItsTargetIsKept) {
           << e.what();
     }
   }
-  EXPECT_EQ(slurp(target), "precious");
+  EXPECT_EQ(rig_test::file_bytes(target), "precious");
   EXPECT_TRUE(fs::is_symlink(frame));
 }
 
 TEST_F(FrameFiles, AnExistingFileIsKeptUnlessItIsThisRunsLeftover) {
   const fs::path frame = dir_ / "p0_f0.png";
   write_new_file(frame, "first", false);
-  EXPECT_EQ(slurp(frame), "first");
+  EXPECT_EQ(rig_test::file_bytes(frame), "first");
   EXPECT_THROW(write_new_file(frame, "second", false), std::runtime_error);
-  EXPECT_EQ(slurp(frame), "first");
+  EXPECT_EQ(rig_test::file_bytes(frame), "first");
   write_new_file(frame, "second", true);
-  EXPECT_EQ(slurp(frame), "second");
+  EXPECT_EQ(rig_test::file_bytes(frame), "second");
 }
 
 TEST_F(FrameFiles, AFolderThatIsAFileOrALinkOrReadOnlyIsRefusedNamingIt) {

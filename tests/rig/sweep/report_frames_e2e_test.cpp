@@ -11,6 +11,7 @@
 #include <string>
 
 #include "db/store/store.hpp"
+#include "file_bytes.hpp"
 #include "rig_command.hpp"
 #include "sim_rig_fixture.hpp"
 
@@ -18,13 +19,6 @@ namespace {
 
 using rig_test::SimRig;
 using rig_test::SweepFileOptions;
-
-std::string slurp(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream out;
-  out << in.rdbuf();
-  return out.str();
-}
 
 std::string unbase64(const std::string& text) {
   std::string out;
@@ -71,8 +65,9 @@ TEST(ReportFrames, ShowSavedFramesWithTheDetectedCornersDrawnWhereTheDetectionsS
   const auto r = rig_test::run_rig("report " + rig.database() + " --out " + rig.file("report"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "");
-  const std::string html = slurp(rig.file("report/report.html"));
-  const nlohmann::json json = nlohmann::json::parse(slurp(rig.file("report/report.json")));
+  const std::string html = rig_test::file_bytes(rig.file("report/report.html"));
+  const nlohmann::json json =
+      nlohmann::json::parse(rig_test::file_bytes(rig.file("report/report.json")));
   // The fixture's six positions (x 300..800 mm in 100 mm steps) are about
   // 0.1 m apart in distance, wider than a class (0.09 m): each class shows
   // its first positions, so at least five pictures.
@@ -125,7 +120,7 @@ TEST(ReportFrames, SayHowToGetThemWhenTheRunSavedNone) {
   const auto r = rig_test::run_rig("report " + rig.database() + " --out " + rig.file("report"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "");
-  const std::string html = slurp(rig.file("report/report.html"));
+  const std::string html = rig_test::file_bytes(rig.file("report/report.html"));
   EXPECT_EQ(html.find("<figure class=\"frame\""), std::string::npos);
   EXPECT_NE(html.find("[capture] save_frames"), std::string::npos);
 }

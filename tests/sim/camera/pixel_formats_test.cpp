@@ -13,6 +13,7 @@
 #include <mutex>
 #include <opencv2/imgproc.hpp>
 
+#include "camera_frames.hpp"
 #include "sim/camera/server.hpp"
 #include "vision/frame_measurement.hpp"
 #include "vision/gige_source.hpp"
@@ -20,10 +21,11 @@
 
 namespace {
 
+using rig_test::differing_pixels;
+using rig_test::kFrameWait;
+
 using namespace std::chrono_literals;
 
-// Bounds a broken test only: a frame arrives within tens of milliseconds.
-constexpr auto kFrameWait = 10s;
 constexpr double kX = 250, kY = 150;  // bench position of every frame, mm
 
 class PixelFormats : public ::testing::Test {
@@ -97,11 +99,6 @@ cv::Mat rescaled(const cv::Mat& codes, int from_bits, int to_bits) {
         out.at<uint8_t>(y, x) = static_cast<uint8_t>(v);
     }
   return out;
-}
-
-int differing_pixels(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size() || a.type() != b.type()) return -1;
-  return cv::countNonZero(a != b);
 }
 
 struct FormatCase {

@@ -19,17 +19,16 @@
 #include <opencv2/core.hpp>
 #include <thread>
 
+#include "camera_frames.hpp"
 #include "sim/camera/config.hpp"
 #include "vision/gige_source.hpp"
 
 namespace {
 
-using namespace std::chrono_literals;
+using rig_test::differing_pixels;
+using rig_test::kFrameWait;
 
-// A frame arrives within tens of milliseconds (render and exposure); a grab
-// returns as soon as it is there, so this only bounds a broken test, with
-// room for a loaded host or a sanitizer build.
-constexpr auto kFrameWait = 10s;
+using namespace std::chrono_literals;
 
 // A bench whose actual position the test sets, optionally moving at a
 // constant speed along x from the moment it is set.
@@ -76,11 +75,6 @@ class SimCamera : public ::testing::Test {
   TestBench bench_;
   std::unique_ptr<sim::camera::CameraServer> server_;
 };
-
-int differing_pixels(const cv::Mat& a, const cv::Mat& b) {
-  if (a.size() != b.size() || a.type() != b.type()) return -1;
-  return cv::countNonZero(a != b);
-}
 
 TEST_F(SimCamera, TriggeredFrameIsTheRenderOfTheBenchPosition) {
   start();
