@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "config/reader.hpp"
 #include "motion/errors.hpp"
 #include "settle_watch.hpp"
 
@@ -28,13 +29,6 @@ constexpr int kMaxReadRegisters = 125;
 constexpr int kMaxAttempts = 5;
 constexpr milliseconds kBackoffFirst{10};
 constexpr milliseconds kBackoffMax{500};
-
-std::string fmt_mm(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 
 }  // namespace
 
@@ -66,8 +60,8 @@ std::string ModbusBench::where() const {
 }
 
 std::string ModbusBench::at(const XY& p) const {
-  if (profile_.single_axis()) return fmt_mm(p.x_mm) + " mm";
-  return "(" + fmt_mm(p.x_mm) + ", " + fmt_mm(p.y_mm) + ") mm";
+  if (profile_.single_axis()) return config::format_number(p.x_mm) + " mm";
+  return "(" + config::format_number(p.x_mm) + ", " + config::format_number(p.y_mm) + ") mm";
 }
 
 void ModbusBench::reconnect(const char* what, bool first) {
@@ -431,17 +425,18 @@ void ModbusBench::check_speed(double speed_mm_s) const {
   // One drive of several is named; a controller's message is the bench's own.
   const std::string who = profile_.single_axis() ? where() + ": " : "";
   if (!(speed_mm_s > 0) || speed_mm_s > profile_.max_speed_mm_s) {
-    throw SoftLimitError(who + "speed " + fmt_mm(speed_mm_s) + " mm/s is outside (0, " +
-                         fmt_mm(profile_.max_speed_mm_s) + "] (motion.max_speed_mm_s of " +
-                         profile_.source + ")");
+    throw SoftLimitError(who + "speed " + config::format_number(speed_mm_s) +
+                         " mm/s is outside (0, " + config::format_number(profile_.max_speed_mm_s) +
+                         "] (motion.max_speed_mm_s of " + profile_.source + ")");
   }
   // The drive takes the speed as an integer in its own units; one that
   // rounds to 0 is refused by the drive (or means "stand still").
   if (std::lround(speed_mm_s * profile_.speed_units_per_mm_s) < 1) {
-    throw SoftLimitError(
-        who + "speed " + fmt_mm(speed_mm_s) + " mm/s rounds to 0 in the drive's units (" +
-        fmt_mm(profile_.speed_units_per_mm_s) + " per mm/s, " + profile_.source +
-        "); expected at least " + fmt_mm(0.5 / profile_.speed_units_per_mm_s) + " mm/s");
+    throw SoftLimitError(who + "speed " + config::format_number(speed_mm_s) +
+                         " mm/s rounds to 0 in the drive's units (" +
+                         config::format_number(profile_.speed_units_per_mm_s) + " per mm/s, " +
+                         profile_.source + "); expected at least " +
+                         config::format_number(0.5 / profile_.speed_units_per_mm_s) + " mm/s");
   }
 }
 
@@ -462,11 +457,12 @@ std::array<std::int32_t, 2> ModbusBench::target_counts(double x_mm, double y_mm)
   const bool inside = profile_.single_axis() ? x_mm >= lim.x_min_mm && x_mm <= lim.x_max_mm
                                              : lim.contains(x_mm, y_mm);
   if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !inside) {
-    throw SoftLimitError("move to (" + fmt_mm(x_mm) + ", " + fmt_mm(y_mm) +
-                         ") mm refused, nothing sent: outside the soft limits x [" +
-                         fmt_mm(lim.x_min_mm) + ", " + fmt_mm(lim.x_max_mm) + "], y [" +
-                         fmt_mm(lim.y_min_mm) + ", " + fmt_mm(lim.y_max_mm) + "] mm of " +
-                         profile_.source);
+    throw SoftLimitError(
+        "move to (" + config::format_number(x_mm) + ", " + config::format_number(y_mm) +
+        ") mm refused, nothing sent: outside the soft limits x [" +
+        config::format_number(lim.x_min_mm) + ", " + config::format_number(lim.x_max_mm) +
+        "], y [" + config::format_number(lim.y_min_mm) + ", " +
+        config::format_number(lim.y_max_mm) + "] mm of " + profile_.source);
   }
   // Quantize towards the inside: a target within half a count of a limit must
   // not round to a position beyond it.

@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "config/reader.hpp"
 #include "motion/errors.hpp"
 #include "settle_watch.hpp"
 
@@ -17,13 +18,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using std::chrono::milliseconds;
-
-std::string fmt_mm(double v) {
-  std::ostringstream s;
-  s.precision(6);
-  s << v;
-  return s.str();
-}
 
 // The link of one drive: its own URL, or the bench URL with its unit id.
 BenchUrl drive_url(const BenchUrl& bench, const AxisDrive& d) {
@@ -83,11 +77,12 @@ void TwoDriveBench::home() {
 void TwoDriveBench::move_to(double x_mm, double y_mm) {
   const SoftLimits& lim = profile_.soft_limits;
   if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !lim.contains(x_mm, y_mm)) {
-    throw SoftLimitError("move to (" + fmt_mm(x_mm) + ", " + fmt_mm(y_mm) +
-                         ") mm refused, nothing sent: outside the soft limits x [" +
-                         fmt_mm(lim.x_min_mm) + ", " + fmt_mm(lim.x_max_mm) + "], y [" +
-                         fmt_mm(lim.y_min_mm) + ", " + fmt_mm(lim.y_max_mm) + "] mm of " +
-                         profile_.source);
+    throw SoftLimitError(
+        "move to (" + config::format_number(x_mm) + ", " + config::format_number(y_mm) +
+        ") mm refused, nothing sent: outside the soft limits x [" +
+        config::format_number(lim.x_min_mm) + ", " + config::format_number(lim.x_max_mm) +
+        "], y [" + config::format_number(lim.y_min_mm) + ", " +
+        config::format_number(lim.y_max_mm) + "] mm of " + profile_.source);
   }
   // Both targets are written before either drive starts: a drive that
   // refuses its target leaves both standing.
@@ -105,20 +100,21 @@ void TwoDriveBench::move_to(double x_mm, double y_mm) {
   } catch (const BenchError& e) {
     stop_quietly(*x_, "the Y axis drive's start");
     throw BenchWriteError(std::string(e.what()) + "; the X axis drive had started to " +
-                          fmt_mm(x_mm) + " mm and was stopped: " + holdings(*x_, "its new target") +
-                          "; " + holdings(*y_, "its new target"));
+                          config::format_number(x_mm) + " mm and was stopped: " +
+                          holdings(*x_, "its new target") + "; " + holdings(*y_, "its new target"));
   }
 }
 
 std::string TwoDriveBench::holdings(ModbusBench& d, const char* what) {
   std::string s = d.where() + " ";
   try {
-    s += "stands at " + fmt_mm(d.status().position.x_mm) + " mm";
+    s += "stands at " + config::format_number(d.status().position.x_mm) + " mm";
   } catch (const BenchError&) {
     s += "position unreadable";
   }
   try {
-    s += ", its target registers hold " + fmt_mm(d.target_registers().x_mm) + " mm (" + what + ")";
+    s += ", its target registers hold " + config::format_number(d.target_registers().x_mm) +
+         " mm (" + what + ")";
   } catch (const BenchError&) {
     s += ", its target registers unreadable";
   }

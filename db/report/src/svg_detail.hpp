@@ -29,6 +29,9 @@ inline constexpr double kMarkerRadius = 3.5;
 inline constexpr double kLegendRow = 18;
 inline constexpr double kLegendSample = 24;  // width of the line/marker sample in an entry
 
+// A value for an error message, to 17 significant digits (it reads back
+// exactly).
+std::string number(double v);
 // Text for XML content or a quoted attribute; control characters XML 1.0
 // forbids become spaces.
 std::string escape(std::string_view text);

@@ -22,12 +22,6 @@ using namespace detail;
 
 constexpr double kPadding = 0.04;  // of the data span, on each unfixed side
 
-std::string number(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
 bool id_is_valid(const std::string& id) {
   if (id.empty()) return false;
   for (char c : id) {
@@ -239,6 +233,12 @@ Counts count_points(const Figure& f) {
 }  // namespace
 
 namespace detail {
+
+std::string number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
+  return buf;
+}
 
 std::string escape(std::string_view text) {
   std::string out;

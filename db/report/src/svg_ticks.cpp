@@ -8,9 +8,12 @@
 #include <vector>
 
 #include "db/report/svg_plot.hpp"
+#include "svg_detail.hpp"
 
 namespace db::report::svg {
 namespace {
+
+using detail::number;
 
 // 10^e as the nearest double (exact for |e| <= 22, which covers every
 // range a report draws; pow is correctly rounded on glibc beyond that).
@@ -22,12 +25,6 @@ double power_of_ten(int e) {
 // nearest double to a decimal like 0.6, where mantissa * 0.1 would not.
 double scaled(double mantissa, int e) {
   return e >= 0 ? mantissa * power_of_ten(e) : mantissa / power_of_ten(-e);
-}
-
-std::string number(double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
 }
 
 // Decimal places needed to write `step` exactly (0.25 -> 2, 500 -> 0).

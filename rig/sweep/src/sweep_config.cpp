@@ -24,10 +24,6 @@ namespace {
 namespace fs = std::filesystem;
 using config::Table;
 
-std::string num(double v) {
-  return config::format_number(v);
-}
-
 constexpr const char* kCameraForms =
     "a camera spec gige:ADDRESS | gige:ID | v4l2:PATH | replay:DIR";
 constexpr const char* kBenchForms =
@@ -95,11 +91,13 @@ void check_inside_soft_limits(const Table& s, const std::string& kind, const Swe
     s.fail(kind == "csv" ? "file"
            : x_inside    ? "y_mm"
                          : "x_mm",
-           "every position inside the bench's soft limits x " + num(limits.x_min_mm) + ".." +
-               num(limits.x_max_mm) + " mm, y " + num(limits.y_min_mm) + ".." +
-               num(limits.y_max_mm) + " mm",
-           "position " + std::to_string(i) + " (x " + num(p.x_mm) + ", y " + num(p.y_mm) +
-               " mm) is outside");
+           "every position inside the bench's soft limits x " +
+               config::format_number(limits.x_min_mm) + ".." +
+               config::format_number(limits.x_max_mm) + " mm, y " +
+               config::format_number(limits.y_min_mm) + ".." +
+               config::format_number(limits.y_max_mm) + " mm",
+           "position " + std::to_string(i) + " (x " + config::format_number(p.x_mm) + ", y " +
+               config::format_number(p.y_mm) + " mm) is outside");
   }
 }
 
@@ -130,8 +128,9 @@ void read_bench(Table bench, SweepConfig* c) {
                                 [&] { return motion::load_drive_profile(c->bench_profile_path); });
   const double max_speed = c->bench_profile.max_speed_mm_s;
   c->speed_mm_s = bench.optional_number(
-      "speed_mm_s", {"a speed in (0, " + num(max_speed) + "] mm/s (the profile's max)",
-                     [&](double v) { return v > 0 && v <= max_speed; }});
+      "speed_mm_s",
+      {"a speed in (0, " + config::format_number(max_speed) + "] mm/s (the profile's max)",
+       [&](double v) { return v > 0 && v <= max_speed; }});
   c->home_first = bench.boolean_or("home_first", true);
   bench.reject_unknown();
 }
@@ -404,8 +403,9 @@ void check_target_in_front(const Table& rig, const SweepConfig& c) {
     const double z_m = c.geometry.T_cam_target(p.x_mm, p.y_mm).t.z();
     if (!(z_m > 0)) {
       rig.fail(rig_key, "a geometry with the target in front of the camera at every plan position",
-               "at position " + std::to_string(i) + " (x " + num(p.x_mm) + ", y " + num(p.y_mm) +
-                   " mm) the target origin is at z_cam = " + num(z_m) + " m");
+               "at position " + std::to_string(i) + " (x " + config::format_number(p.x_mm) +
+                   ", y " + config::format_number(p.y_mm) +
+                   " mm) the target origin is at z_cam = " + config::format_number(z_m) + " m");
     }
   }
 }
@@ -422,13 +422,14 @@ void check_settle_timeout(const Table& settle, const SweepConfig& c) {
     const double travel_mm = std::max(std::abs(to.x_mm - from.x_mm), std::abs(to.y_mm - from.y_mm));
     const double move_ms = travel_mm / speed * 1000.0;
     if (move_ms >= static_cast<double>(c.settle.timeout.count())) {
-      const std::string where = i == 0
-                                    ? "home (x " + num(from.x_mm) + ", y " + num(from.y_mm) + " mm)"
-                                    : "position " + std::to_string(i - 1);
+      const std::string where = i == 0 ? "home (x " + config::format_number(from.x_mm) + ", y " +
+                                             config::format_number(from.y_mm) + " mm)"
+                                       : "position " + std::to_string(i - 1);
       settle.fail("timeout_ms",
-                  "a timeout longer than the longest move of the plan: " + num(travel_mm) +
-                      " mm from " + where + " to position " + std::to_string(i) +
-                      " takes at least " + num(move_ms) + " ms at " + num(speed) + " mm/s",
+                  "a timeout longer than the longest move of the plan: " +
+                      config::format_number(travel_mm) + " mm from " + where + " to position " +
+                      std::to_string(i) + " takes at least " + config::format_number(move_ms) +
+                      " ms at " + config::format_number(speed) + " mm/s",
                   settle.has("timeout_ms")
                       ? ""
                       : "absent, so the profile's settle_timeout_ms = " +

@@ -6,16 +6,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "config/reader.hpp"
+
 namespace rig::sweep {
 namespace {
-
-// Shortest readable form of a length for messages and descriptions ("13.6", "900").
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(10);
-  s << v;
-  return s.str();
-}
 
 // Two values closer than this (mm) are the same grid value: a step that
 // divides the range up to rounding must not add a second, 1e-13 mm shorter
@@ -40,17 +34,18 @@ std::vector<double> axis_values(double min, double max, double step) {
 // Axis values of a grid, checked; `axis` is "x" or "y".
 std::vector<double> checked_axis(const std::string& axis, double min, double max, double step) {
   auto fail = [&](const std::string& key, double value, const std::string& expected) {
-    throw PlanError("grid: " + axis + "_" + key + "_mm = " + num(value) + ": expected " + expected);
+    throw PlanError("grid: " + axis + "_" + key + "_mm = " + config::format_number(value) +
+                    ": expected " + expected);
   };
   if (!std::isfinite(min)) fail("min", min, "a finite number");
   if (!std::isfinite(max)) fail("max", max, "a finite number");
   if (!std::isfinite(step) || step <= 0) fail("step", step, "a finite number > 0");
-  if (max < min) fail("max", max, ">= " + axis + "_min_mm (" + num(min) + ")");
+  if (max < min) fail("max", max, ">= " + axis + "_min_mm (" + config::format_number(min) + ")");
   // Checked before the values are made, so a step of 1e-9 mm fails at once.
   if ((max - min) / step + 2 > static_cast<double>(SweepPlan::kMaxPositions)) {
     fail("step", step,
          "a step giving at most " + std::to_string(SweepPlan::kMaxPositions) + " positions over " +
-             num(min) + ".." + num(max) + " mm");
+             config::format_number(min) + ".." + config::format_number(max) + " mm");
   }
   return axis_values(min, max, step);
 }
@@ -88,11 +83,12 @@ SweepPlan SweepPlan::grid(const Grid& g) {
       positions.push_back({xs[reversed ? xs.size() - 1 - i : i], ys[row]});
     }
   }
-  const std::string description = "grid x " + num(g.x_min_mm) + ".." + num(g.x_max_mm) + " step " +
-                                  num(g.x_step_mm) + " mm, y " + num(g.y_min_mm) + ".." +
-                                  num(g.y_max_mm) + " step " + num(g.y_step_mm) + " mm, " +
-                                  (g.serpentine ? "serpentine" : "row by row") + " (" +
-                                  std::to_string(positions.size()) + " positions)";
+  const std::string description =
+      "grid x " + config::format_number(g.x_min_mm) + ".." + config::format_number(g.x_max_mm) +
+      " step " + config::format_number(g.x_step_mm) + " mm, y " +
+      config::format_number(g.y_min_mm) + ".." + config::format_number(g.y_max_mm) + " step " +
+      config::format_number(g.y_step_mm) + " mm, " + (g.serpentine ? "serpentine" : "row by row") +
+      " (" + std::to_string(positions.size()) + " positions)";
   return SweepPlan(std::move(positions), description);
 }
 
@@ -147,8 +143,8 @@ SweepPlan SweepPlan::from_csv(const std::string& path) {
 SweepPlan SweepPlan::paper(double x_min_mm, double x_max_mm, double y_min_mm, double y_max_mm) {
   auto check = [](const std::string& axis, double min, double max) {
     if (!std::isfinite(min) || !std::isfinite(max) || !(min < max)) {
-      throw PlanError("paper plan: " + axis + " range " + num(min) + ".." + num(max) +
-                      " mm: expected finite numbers with min < max");
+      throw PlanError("paper plan: " + axis + " range " + config::format_number(min) + ".." +
+                      config::format_number(max) + " mm: expected finite numbers with min < max");
     }
   };
   check("x", x_min_mm, x_max_mm);
@@ -166,11 +162,12 @@ SweepPlan SweepPlan::paper(double x_min_mm, double x_max_mm, double y_min_mm, do
       positions.push_back({at(x_min_mm, x_max_mm, column, kPaperColumns), y});
     }
   }
-  const std::string description = "paper (Maidi et al. 2010): " + std::to_string(kPaperRows) +
-                                  " rows x " + std::to_string(kPaperColumns) + " columns over x " +
-                                  num(x_min_mm) + ".." + num(x_max_mm) + " mm, y " + num(y_min_mm) +
-                                  ".." + num(y_max_mm) + " mm, serpentine (" +
-                                  std::to_string(positions.size()) + " positions)";
+  const std::string description =
+      "paper (Maidi et al. 2010): " + std::to_string(kPaperRows) + " rows x " +
+      std::to_string(kPaperColumns) + " columns over x " + config::format_number(x_min_mm) + ".." +
+      config::format_number(x_max_mm) + " mm, y " + config::format_number(y_min_mm) + ".." +
+      config::format_number(y_max_mm) + " mm, serpentine (" + std::to_string(positions.size()) +
+      " positions)";
   return SweepPlan(std::move(positions), description);
 }
 
