@@ -292,6 +292,13 @@ void check_timing(const DriveProfile& p) {
 
 }  // namespace
 
+std::string SoftLimits::refusal(double x_mm, double y_mm, const std::string& source) const {
+  return "move to (" + format_number(x_mm) + ", " + format_number(y_mm) +
+         ") mm refused, nothing sent: outside the soft limits x [" + format_number(x_min_mm) +
+         ", " + format_number(x_max_mm) + "], y [" + format_number(y_min_mm) + ", " +
+         format_number(y_max_mm) + "] mm of " + source;
+}
+
 std::int32_t DriveProfile::to_counts(double mm) const {
   return static_cast<std::int32_t>(std::lround(mm * counts_per_mm));
 }

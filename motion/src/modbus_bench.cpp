@@ -457,12 +457,7 @@ std::array<std::int32_t, 2> ModbusBench::target_counts(double x_mm, double y_mm)
   const bool inside = profile_.single_axis() ? x_mm >= lim.x_min_mm && x_mm <= lim.x_max_mm
                                              : lim.contains(x_mm, y_mm);
   if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !inside) {
-    throw SoftLimitError(
-        "move to (" + config::format_number(x_mm) + ", " + config::format_number(y_mm) +
-        ") mm refused, nothing sent: outside the soft limits x [" +
-        config::format_number(lim.x_min_mm) + ", " + config::format_number(lim.x_max_mm) +
-        "], y [" + config::format_number(lim.y_min_mm) + ", " +
-        config::format_number(lim.y_max_mm) + "] mm of " + profile_.source);
+    throw SoftLimitError(lim.refusal(x_mm, y_mm, profile_.source));
   }
   // Quantize towards the inside: a target within half a count of a limit must
   // not round to a position beyond it.

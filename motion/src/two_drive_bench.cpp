@@ -77,12 +77,7 @@ void TwoDriveBench::home() {
 void TwoDriveBench::move_to(double x_mm, double y_mm) {
   const SoftLimits& lim = profile_.soft_limits;
   if (!std::isfinite(x_mm) || !std::isfinite(y_mm) || !lim.contains(x_mm, y_mm)) {
-    throw SoftLimitError(
-        "move to (" + config::format_number(x_mm) + ", " + config::format_number(y_mm) +
-        ") mm refused, nothing sent: outside the soft limits x [" +
-        config::format_number(lim.x_min_mm) + ", " + config::format_number(lim.x_max_mm) +
-        "], y [" + config::format_number(lim.y_min_mm) + ", " +
-        config::format_number(lim.y_max_mm) + "] mm of " + profile_.source);
+    throw SoftLimitError(lim.refusal(x_mm, y_mm, profile_.source));
   }
   // Both targets are written before either drive starts: a drive that
   // refuses its target leaves both standing.

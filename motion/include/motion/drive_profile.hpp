@@ -80,6 +80,9 @@ struct SoftLimits {
   bool contains(double x_mm, double y_mm) const {
     return x_mm >= x_min_mm && x_mm <= x_max_mm && y_mm >= y_min_mm && y_mm <= y_max_mm;
   }
+  // The SoftLimitError message for a move to (x_mm, y_mm) that these limits
+  // refuse, naming the target, the box and `source` (the profile's file).
+  std::string refusal(double x_mm, double y_mm, const std::string& source) const;
 };
 
 struct Timing {
