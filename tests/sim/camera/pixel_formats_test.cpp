@@ -51,15 +51,18 @@ class PixelFormats : public ::testing::Test {
         options);
     server_->start();
   }
-  // One triggered frame in `pixel_format`.
+  // One triggered frame in `pixel_format`. A payload the format gets wrong
+  // makes every frame incomplete, and grab() throws once its retries are
+  // spent. A single incomplete frame is a packet lost on a busy host (seen
+  // with sanitized tests on both cores), which the retry rides out, so the
+  // count of incomplete frames is not held to zero here; the capture tests
+  // hold the link itself to that.
   vision::Frame grab(const std::string& pixel_format, vision::CaptureOptions options = {}) {
     options.pixel_format = pixel_format;
     vision::GigeSource source(server_->address(), options);
     source.open();
     source.trigger();
-    vision::Frame frame = source.grab(kFrameWait);
-    EXPECT_EQ(source.counters().incomplete, 0u);
-    return frame;
+    return source.grab(kFrameWait);
   }
   // The sensor's codes of the last frame.
   cv::Mat rendered(double exposure_scale = 1.0, double gain = 1.0) const {
