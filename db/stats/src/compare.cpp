@@ -1,5 +1,7 @@
 #include "db/stats/compare.hpp"
 
+#include <math.h>
+
 #include <cmath>
 #include <string>
 
@@ -103,11 +105,18 @@ double beta_continued_fraction(double a, double b, double x) {
   return h;
 }
 
+// log Γ(x), x > 0: lgamma_r (POSIX), because std::lgamma also writes the
+// global signgam, a data race when the report studies solvers on two threads.
+double log_gamma(double x) {
+  int sign = 0;
+  return lgamma_r(x, &sign);
+}
+
 double regularized_incomplete_beta(double a, double b, double x) {
   if (x <= 0.0) return 0.0;
   if (x >= 1.0) return 1.0;
-  const double front = std::exp(std::lgamma(a + b) - std::lgamma(a) - std::lgamma(b) +
-                                a * std::log(x) + b * std::log1p(-x));
+  const double front = std::exp(log_gamma(a + b) - log_gamma(a) - log_gamma(b) + a * std::log(x) +
+                                b * std::log1p(-x));
   if (x < (a + 1.0) / (a + b + 2.0)) return front * beta_continued_fraction(a, b, x) / a;
   return 1.0 - front * beta_continued_fraction(b, a, 1.0 - x) / b;
 }
