@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <future>
+#include <set>
 #include <string_view>
 #include <tuple>
 #include <unordered_map>
@@ -18,19 +20,18 @@ namespace db::report {
 // every estimate of the run's frames (kEstimateIdsQuery over the run's frame
 // ids), each row kept when its frame is one of the run's: a sequential pass
 // over the table instead of a join that descends the table's B-tree once
-// per row (about half of the report's time on 1,000,000 estimates).
+// per row (about half of the report's time on 1,000,000 estimates). The
+// range is read in two parts, one per core (load_run).
 // A solver's series is named after the solver for the run's primary
-// detector (?3) and "SOLVER@DETECTOR" for another detector's corners
+// detector and "SOLVER@DETECTOR" for another detector's corners
 // (series_name, report.hpp): every table, figure and comparison keys by both.
 const char* const kEstimateIdsQuery =
     "SELECT min(id), max(id) FROM estimates WHERE frame_id BETWEEN ?1 AND ?2";
 const char* const kEstimatesQuery =
-    "SELECT e.frame_id, "
-    "CASE WHEN e.detector = ?3 THEN e.solver ELSE e.solver || '@' || e.detector END, "
-    "e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
+    "SELECT e.frame_id, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, "
     "e.r12, e.r20, e.r21, e.r22, e.distance_m, e.reprojection_error_px, "
     "e.generalization_error_px, e.converged, e.termination, e.time_us, e.ambiguity_ratio, "
-    "e.tx_m, e.ty_m, e.tz_m "
+    "e.tx_m, e.ty_m, e.tz_m, e.detector "
     "FROM estimates e WHERE e.id BETWEEN ?1 AND ?2 ORDER BY e.id";
 
 const char* const kDetectionsQuery =
@@ -41,25 +42,32 @@ const char* const kDetectionsQuery =
     "WHERE p.run_id = ?1 AND d.detector = (SELECT primary_detector FROM runs WHERE id = ?1) "
     "ORDER BY p.plan_index, f.frame_index";
 
-// Per detector: the markers in view it found (each marker once a frame), the
-// true-corner RMS of those detections within kMisplacedPx of the truth, and
-// how many were farther (a marker's id decoded at another place).
+// Per detector with detections in the run: the markers in view it found
+// (each marker once a frame), the true-corner RMS of those detections within
+// kMisplacedPx of the truth, and how many were farther (a marker's id decoded
+// at another place). The detectors of the run's estimates come from their pass.
 const char* const kDetectorQuery =
-    "SELECT d.detector, count(DISTINCT d.frame_id * 65536 + d.marker_id), "
-    "sum(CASE WHEN d.true_corner_rms_px <= 10.0 THEN d.true_corner_rms_px * "
-    "d.true_corner_rms_px END), count(CASE WHEN d.true_corner_rms_px <= 10.0 THEN 1 END), "
-    "count(CASE WHEN d.true_corner_rms_px > 10.0 THEN 1 END) "
+    "SELECT d.detector, count(DISTINCT CASE WHEN v.marker_id IS NOT NULL THEN "
+    "d.frame_id * 65536 + d.marker_id END), "
+    "sum(CASE WHEN v.marker_id IS NOT NULL AND d.true_corner_rms_px <= 10.0 THEN "
+    "d.true_corner_rms_px * d.true_corner_rms_px END), "
+    "count(CASE WHEN v.marker_id IS NOT NULL AND d.true_corner_rms_px <= 10.0 THEN 1 END), "
+    "count(CASE WHEN v.marker_id IS NOT NULL AND d.true_corner_rms_px > 10.0 THEN 1 END) "
     "FROM positions p JOIN frames f ON f.position_id = p.id "
     "JOIN detections d ON d.frame_id = f.id "
-    "JOIN visible_markers v ON v.position_id = p.id AND v.marker_id = d.marker_id "
+    "LEFT JOIN visible_markers v ON v.position_id = p.id AND v.marker_id = d.marker_id "
     "WHERE p.run_id = ?1 GROUP BY d.detector";
 
-// The detectors of a run: those of its estimates and detections.
-const char* const kDetectorNamesQuery =
-    "SELECT DISTINCT e.detector FROM positions p JOIN frames f ON f.position_id = p.id "
-    "JOIN estimates e ON e.frame_id = f.id WHERE p.run_id = ?1 "
-    "UNION SELECT DISTINCT d.detector FROM positions p JOIN frames f ON f.position_id = p.id "
-    "JOIN detections d ON d.frame_id = f.id WHERE p.run_id = ?1";
+// What two snapshots of one file must agree on for the run's rows to be the
+// same in both (load_run): every write to a run's positions, frames,
+// detections and estimates happens while it is running, and a run the
+// report reads is not; resuming it clears ended_at and ending it again
+// stamps a new one (milliseconds).
+const char* const kRunVersionQuery =
+    "SELECT status, status_reason, ended_at, "
+    "(SELECT count(*) FROM positions WHERE run_id = ?1), "
+    "(SELECT max(id) FROM positions WHERE run_id = ?1), "
+    "(SELECT max(id) FROM estimates) FROM runs WHERE id = ?1";
 
 const char* const kFramesQuery =
     "SELECT p.plan_index, f.frame_index, f.id FROM positions p "
@@ -265,6 +273,14 @@ class RunFrames {
   };
   std::int64_t first = 0, last = -1;  // none when last < first
 
+  // The row id that splits [first, last] after `share` of it (0 < share <=
+  // 1): last + 1 for share 1.
+  std::int64_t split(double share) const {
+    if (last < first) return last + 1;
+    const auto size = static_cast<double>(last - first + 1);
+    return first + std::max<std::int64_t>(1, static_cast<std::int64_t>(share * size));
+  }
+
   const Frame* find(std::int64_t frame_id) const {
     if (frame_id < first || frame_id > last) return nullptr;
     const Frame& f = frames_[static_cast<std::size_t>(frame_id - first)];
@@ -322,6 +338,7 @@ enum : int {
   kTime = 17,
   kAmbiguity = 18,
   kTranslation = 19,  // tx, ty, tz: columns 19 .. 21
+  kDetector = 22,
 };
 }  // namespace estimate_column
 
@@ -384,61 +401,75 @@ SampleStatus status_of(const store::sqlite::Statement& row, const EstimateSample
   return SampleStatus::kFailed;
 }
 
-// The state of the pass over the estimates: the solver x scope data in order
-// of first appearance, and the converged rotations of the current frame by
-// solver, whose pairs become the flip samples. Rows come in row id order:
-// a frame's rows together, frames in the order they were stored.
+// One pass over a range of estimate rows: the solver x scope data in order
+// of first appearance, the flip samples, and the converged rotations of the
+// current frame by series, whose pairs become the flip samples. Rows come in
+// row id order: a frame's rows together (a position is stored in one
+// transaction), frames in the order they were stored. The passes over the
+// frames below a frame id and over the frames from it add up (append) to the
+// pass over both: each keeps a frame's rows together, and finish() puts every
+// series in plan order either way.
 class EstimatesPass {
  public:
-  explicit EstimatesPass(RunData& data) : data_(data) {}
+  explicit EstimatesPass(const RunData& data) : data_(&data) {}
 
-  // Moves to the frame of a row.
-  void enter_frame(const RunFrames::Frame& frame) {
-    if (&frame == frame_) return;
-    flush_frame();
-    if (frame_ != nullptr && std::make_pair(frame.slot, frame.frame_index) <
-                                 std::make_pair(frame_->slot, frame_->frame_index))
-      in_plan_order_ = false;  // a position stored again later (a retake)
-    frame_ = &frame;
-  }
-  std::uint32_t slot() const { return frame_->slot; }
-
-  // The index of (solver, scope) in solvers_ (solver and scope: the row's
-  // text, valid until the next row). Every frame names the solvers and
-  // scopes in the same order, so the key after the last one is tried first.
-  std::size_t key_of(std::string_view solver, std::string_view scope) {
-    for (std::size_t k = 0; k < keys_.size(); ++k) {
-      const std::size_t i = (next_key_ + k) % keys_.size();
-      if (keys_[i].solver == solver && keys_[i].scope == scope) {
-        next_key_ = i + 1;
-        return i;
-      }
+  // Reads the estimates of the run's frames whose frame row ids are in
+  // [first_frame, last_frame]: the estimate rows of the row id range that
+  // holds them all (kEstimateIdsQuery), keeping those of these frames.
+  void read(store::sqlite::Connection& connection, const RunFrames& frames,
+            std::int64_t first_frame, std::int64_t last_frame) {
+    store::sqlite::Statement bounds(connection, kEstimateIdsQuery);
+    bounds.bind(1, first_frame);
+    bounds.bind(2, last_frame);
+    if (!bounds.step() || bounds.is_null(0)) return;
+    store::sqlite::Statement select(connection, kEstimatesQuery);
+    select.bind(1, bounds.get_int64(0));
+    select.bind(2, bounds.get_int64(1));
+    while (select.step()) {
+      const std::int64_t frame_id = select.get_int64(estimate_column::kFrameId);
+      if (frame_id < first_frame || frame_id > last_frame) continue;  // the other part's
+      const RunFrames::Frame* frame = frames.find(frame_id);
+      if (frame == nullptr) continue;  // another run's frame
+      enter_frame(*frame);
+      add_row(select, key_of(select.get_text_view(estimate_column::kSolver),
+                             select.get_text_view(estimate_column::kDetector),
+                             select.get_text_view(estimate_column::kScope)));
     }
-    std::size_t solver_id = 0;
-    while (solver_id < rotations_.size() && rotations_[solver_id].solver != solver)
-      ++solver_id;
-    if (solver_id == rotations_.size()) rotations_.push_back({std::string(solver), {}});
-    keys_.push_back({std::string(solver), std::string(scope), solver_id});
-    solvers_.push_back(SolverScopeData{std::string(solver), std::string(scope), {}, {}});
-    next_key_ = keys_.size();
-    return keys_.size() - 1;
-  }
-  SolverScopeData& data(std::size_t key) { return solvers_[key]; }
-
-  // A converged estimate's rotation: [0] the pose marker's scope (a marker
-  // id, "0" by default), [1] "target".
-  void keep_rotation(const store::sqlite::Statement& row, std::size_t key) {
-    const int which = keys_[key].scope == "target" ? 1 : 0;
-    FrameRotations& fr = rotations_[keys_[key].solver_id].rotations;
-    fr.has[which] = true;
-    for (int k = 0; k < 9; ++k)
-      fr.R[which][k] = row.get_double(estimate_column::kRotation + k);
-  }
-
-  // After the last row: the last frame's flips, every sample and flip in
-  // plan index then frame order, and the solvers sorted by solver, then scope.
-  void finish() {
     flush_frame();
+  }
+
+  // Adds the pass over the rows after this pass's (read and flushed).
+  void append(EstimatesPass&& later) {
+    if (later.first_frame_ == nullptr) return;
+    if (frame_ != nullptr && stored_before(*later.first_frame_, *frame_)) in_plan_order_ = false;
+    in_plan_order_ = in_plan_order_ && later.in_plan_order_;
+    if (first_frame_ == nullptr) first_frame_ = later.first_frame_;
+    frame_ = later.frame_;
+    for (std::size_t k = 0; k < later.keys_.size(); ++k) {
+      const Key& key = later.keys_[k];
+      SolverScopeData& from = later.solvers_[k];
+      SolverScopeData& to = solvers_[key_of(key.solver, key.detector, key.scope)];
+      to.samples.insert(to.samples.end(), from.samples.begin(), from.samples.end());
+      for (const auto& [termination, n] : from.failures_by_termination)
+        to.failures_by_termination[termination] += n;
+    }
+    for (auto& [series, flips] : later.flips_) {
+      std::vector<FlipSample>& to = flips_[series];
+      to.insert(to.end(), flips.begin(), flips.end());
+    }
+  }
+
+  // The detectors of the rows read.
+  std::set<std::string> detectors() const {
+    std::set<std::string> out;
+    for (const Key& k : keys_)
+      out.insert(k.detector);
+    return out;
+  }
+
+  // After the last append: every sample and flip into `data` in plan index
+  // then frame order, the solvers sorted by series, then scope.
+  void finish(RunData& data) {
     if (!in_plan_order_) {
       for (SolverScopeData& d : solvers_)
         std::stable_sort(d.samples.begin(), d.samples.end(),
@@ -446,7 +477,7 @@ class EstimatesPass {
                            return std::make_pair(a.position, a.frame) <
                                   std::make_pair(b.position, b.frame);
                          });
-      for (auto& [solver, flips] : data_.flips)
+      for (auto& [series, flips] : flips_)
         std::stable_sort(flips.begin(), flips.end(), [](const FlipSample& a, const FlipSample& b) {
           return a.position < b.position;
         });
@@ -459,7 +490,8 @@ class EstimatesPass {
              std::tie(solvers_[b].solver, solvers_[b].scope);
     });
     for (std::size_t i : order)
-      data_.solvers.push_back(std::move(solvers_[i]));
+      data.solvers.push_back(std::move(solvers_[i]));
+    data.flips = std::move(flips_);
   }
 
  private:
@@ -468,73 +500,120 @@ class EstimatesPass {
     std::array<double, 9> R[2];
   };
   struct Key {
-    std::string solver, scope;
-    std::size_t solver_id;  // into rotations_
+    std::string solver, detector, scope;
+    std::size_t series_id;  // into rotations_
   };
-  struct SolverRotations {
-    std::string solver;
+  struct SeriesRotations {
+    std::string series;
     FrameRotations rotations;
   };
 
-  void flush_frame() {
-    for (auto& [solver, fr] : rotations_) {
-      if (fr.has[0] && fr.has[1]) {
-        data_.flips[solver].push_back({frame_->slot, rotation_angle_deg(fr.R[0], fr.R[1])});
+  static bool stored_before(const RunFrames::Frame& a, const RunFrames::Frame& b) {
+    return std::make_pair(a.slot, a.frame_index) < std::make_pair(b.slot, b.frame_index);
+  }
+
+  void enter_frame(const RunFrames::Frame& frame) {
+    if (&frame == frame_) return;
+    flush_frame();
+    if (frame_ != nullptr && stored_before(frame, *frame_))
+      in_plan_order_ = false;  // a position stored again later (a retake)
+    if (first_frame_ == nullptr) first_frame_ = &frame;
+    frame_ = &frame;
+  }
+
+  // The index of (solver, detector, scope) in solvers_ (views valid until the
+  // next row). Every frame names them in the same order, so the key after
+  // the last one is tried first.
+  std::size_t key_of(std::string_view solver, std::string_view detector, std::string_view scope) {
+    for (std::size_t k = 0; k < keys_.size(); ++k) {
+      const std::size_t i = (next_key_ + k) % keys_.size();
+      if (keys_[i].solver == solver && keys_[i].scope == scope && keys_[i].detector == detector) {
+        next_key_ = i + 1;
+        return i;
       }
+    }
+    const std::string series = series_name(std::string(solver), std::string(detector),
+                                           data_->run.description.primary_detector);
+    std::size_t series_id = 0;
+    while (series_id < rotations_.size() && rotations_[series_id].series != series)
+      ++series_id;
+    if (series_id == rotations_.size()) rotations_.push_back({series, {}});
+    keys_.push_back({std::string(solver), std::string(detector), std::string(scope), series_id});
+    solvers_.push_back(SolverScopeData{series, std::string(scope), {}, {}});
+    next_key_ = keys_.size();
+    return keys_.size() - 1;
+  }
+
+  void add_row(const store::sqlite::Statement& row, std::size_t key) {
+    SolverScopeData& target = solvers_[key];
+    EstimateSample s = sample_of(row, frame_->slot);
+    s.frame = frame_->frame_index;
+    s.status = status_of(row, s, target.failures_by_termination);
+    if (s.status == SampleStatus::kConverged) {
+      keep_rotation(row, key);
+      const auto& truth = data_->positions[s.position].record.true_pose;
+      if (truth) add_pose_errors(row, *truth, s);
+    }
+    target.samples.push_back(s);
+  }
+
+  // A converged estimate's rotation: [0] the pose marker's scope (a marker
+  // id, "0" by default), [1] "target".
+  void keep_rotation(const store::sqlite::Statement& row, std::size_t key) {
+    const int which = keys_[key].scope == "target" ? 1 : 0;
+    FrameRotations& fr = rotations_[keys_[key].series_id].rotations;
+    fr.has[which] = true;
+    for (int k = 0; k < 9; ++k)
+      fr.R[which][k] = row.get_double(estimate_column::kRotation + k);
+  }
+
+  void flush_frame() {
+    for (auto& [series, fr] : rotations_) {
+      if (fr.has[0] && fr.has[1])
+        flips_[series].push_back({frame_->slot, rotation_angle_deg(fr.R[0], fr.R[1])});
       fr.has[0] = fr.has[1] = false;
     }
   }
 
-  RunData& data_;
-  std::vector<Key> keys_;                   // by index into solvers_
-  std::vector<SolverScopeData> solvers_;    // in order of first appearance
-  std::vector<SolverRotations> rotations_;  // one per solver name
+  const RunData* data_;                                   // the run and its positions' truth
+  std::vector<Key> keys_;                                 // by index into solvers_
+  std::vector<SolverScopeData> solvers_;                  // in order of first appearance
+  std::vector<SeriesRotations> rotations_;                // one per series
+  std::map<std::string, std::vector<FlipSample>> flips_;  // by series
   std::size_t next_key_ = 0;
-  const RunFrames::Frame* frame_ = nullptr;
+  const RunFrames::Frame* first_frame_ = nullptr;
+  const RunFrames::Frame* frame_ = nullptr;  // the current, then the last, frame
   bool in_plan_order_ = true;
 };
 
-// The row ids [first, last] that hold every estimate of the run's frames;
-// nullopt when they have none.
-std::optional<std::pair<std::int64_t, std::int64_t>> estimate_ids(
-    store::sqlite::Connection& connection, const RunFrames& frames) {
-  if (frames.last < frames.first) return std::nullopt;
-  store::sqlite::Statement bounds(connection, kEstimateIdsQuery);
-  bounds.bind(1, frames.first);
-  bounds.bind(2, frames.last);
-  if (!bounds.step() || bounds.is_null(0)) return std::nullopt;
-  return std::make_pair(bounds.get_int64(0), bounds.get_int64(1));
+// The run's state in a connection's snapshot (kRunVersionQuery), each
+// column as text.
+using RunVersion = std::vector<std::optional<std::string>>;
+RunVersion run_version(store::sqlite::Connection& connection, std::int64_t run_id) {
+  store::sqlite::Statement select(connection, kRunVersionQuery);
+  select.bind(1, run_id);
+  RunVersion version;
+  if (select.step()) {
+    for (int c = 0; c < 6; ++c)
+      version.push_back(select.get_optional_text(c));
+  }
+  return version;
 }
 
-void read_estimates(store::sqlite::Connection& connection, const RunFrames& frames, RunData& data) {
-  EstimatesPass pass(data);
-  const auto ids = estimate_ids(connection, frames);
-  if (!ids) {
-    pass.finish();
-    return;
-  }
-  store::sqlite::Statement select(connection, kEstimatesQuery);
-  select.bind(1, ids->first);
-  select.bind(2, ids->second);
-  select.bind(3, data.run.description.primary_detector);
-  while (select.step()) {
-    const RunFrames::Frame* frame = frames.find(select.get_int64(estimate_column::kFrameId));
-    if (frame == nullptr) continue;  // another run's frame
-    pass.enter_frame(*frame);
-    const std::size_t key = pass.key_of(select.get_text_view(estimate_column::kSolver),
-                                        select.get_text_view(estimate_column::kScope));
-    SolverScopeData& target = pass.data(key);
-    EstimateSample s = sample_of(select, pass.slot());
-    s.frame = frame->frame_index;
-    s.status = status_of(select, s, target.failures_by_termination);
-    if (s.status == SampleStatus::kConverged) {
-      pass.keep_rotation(select, key);
-      const auto& truth = data.positions[s.position].record.true_pose;
-      if (truth) add_pose_errors(select, *truth, s);
-    }
-    target.samples.push_back(s);
-  }
-  pass.finish();
+// Reads the estimates of the run's frames [first_frame, last_frame] on a
+// connection of its own, in a snapshot that agrees with `version`. False,
+// with nothing read, when the run changed in between: the caller then reads
+// them in its own snapshot.
+bool read_in_own_snapshot(const std::string& database, std::int64_t run_id,
+                          const RunVersion& version, const RunFrames& frames,
+                          std::int64_t first_frame, std::int64_t last_frame, EstimatesPass& pass) {
+  store::sqlite::Connection connection(database, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX);
+  connection.exec("PRAGMA query_only = ON");
+  store::sqlite::Transaction transaction(connection, store::sqlite::Transaction::Kind::kRead);
+  if (run_version(connection, run_id) != version) return false;
+  pass.read(connection, frames, first_frame, last_frame);
+  transaction.commit();
+  return true;
 }
 
 // Detections with a non-finite corner or edge-fit residual are counted in
@@ -571,15 +650,10 @@ void read_detections(store::sqlite::Connection& connection, std::int64_t id, con
     flush_markers(series, data.positions[slots.at(current_plan, "detections")]);
 }
 
-// The run's detectors, the primary first, with what kDetectorQuery counts.
-void read_detectors(store::sqlite::Connection& connection, std::int64_t id, RunData& data) {
+// What kDetectorQuery counts, by detector.
+std::map<std::string, DetectorData> count_detections(store::sqlite::Connection& connection,
+                                                     std::int64_t id) {
   std::map<std::string, DetectorData> by_name;
-  {
-    store::sqlite::Statement names(connection, kDetectorNamesQuery);
-    names.bind(1, id);
-    while (names.step())
-      by_name[names.get_text(0)].detector = names.get_text(0);
-  }
   store::sqlite::Statement select(connection, kDetectorQuery);
   select.bind(1, id);
   while (select.step()) {
@@ -590,6 +664,15 @@ void read_detectors(store::sqlite::Connection& connection, std::int64_t id, RunD
     d.corners_vs_truth = static_cast<std::size_t>(select.get_int64(3));
     d.misplaced = static_cast<std::size_t>(select.get_int64(4));
   }
+  return by_name;
+}
+
+// The run's detectors, the primary first, then by name: those of its
+// detections (by_name) and of its estimates.
+void list_detectors(std::map<std::string, DetectorData> by_name,
+                    const std::set<std::string>& of_estimates, RunData& data) {
+  for (const std::string& name : of_estimates)
+    by_name[name].detector = name;
   const std::string& primary = data.run.description.primary_detector;
   if (by_name.count(primary) != 0) data.detectors.push_back(by_name[primary]);
   for (const auto& [name, d] : by_name)
@@ -599,7 +682,7 @@ void read_detectors(store::sqlite::Connection& connection, std::int64_t id, RunD
 }  // namespace
 
 RunData load_run(const std::string& database, std::optional<std::int64_t> run_id,
-                 const std::function<void(RunData&)>& amend_truth) {
+                 const std::function<void(RunData&)>& amend_truth, int estimate_readers) {
   RunData data;
   data.database = database;
   std::optional<store::Store> store(open_for_report(database));
@@ -625,9 +708,28 @@ RunData load_run(const std::string& database, std::optional<std::int64_t> run_id
   if (amend_truth) amend_truth(data);
   data.events = read_events(connection, id);
   const RunFrames frames = read_frames(connection, id, slots, data.positions);
-  read_estimates(connection, frames, data);
+  // The estimates in two parts by frame, on two cores: the later frames on
+  // a second connection (read_in_own_snapshot, which gives them back when
+  // its snapshot does not hold the same run) while this thread reads the
+  // earlier frames, the detections and the detectors. The earlier part is
+  // the smaller because the detections follow it; kFirstShare balances the
+  // two threads on 1,000,000 estimates (bench_report).
+  constexpr double kFirstShare = 0.36;
+  const std::int64_t split = frames.split(estimate_readers > 1 ? kFirstShare : 1.0);
+  EstimatesPass earlier(data), later(data);
+  std::future<bool> later_read;
+  if (split <= frames.last) {
+    later_read = std::async(std::launch::async, read_in_own_snapshot, std::cref(database), id,
+                            run_version(connection, id), std::cref(frames), split, frames.last,
+                            std::ref(later));
+  }
+  earlier.read(connection, frames, frames.first, split - 1);
   read_detections(connection, id, slots, data);
-  read_detectors(connection, id, data);
+  std::map<std::string, DetectorData> detectors = count_detections(connection, id);
+  if (later_read.valid() && !later_read.get()) later.read(connection, frames, split, frames.last);
+  earlier.append(std::move(later));
+  earlier.finish(data);
+  list_detectors(std::move(detectors), earlier.detectors(), data);
   transaction.commit();
   return data;
 }

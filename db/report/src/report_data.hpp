@@ -102,8 +102,10 @@ struct RunData {
 // a failure while reading. `amend_truth`, when set, is called once with the
 // run and its positions before the estimates are read, so that every error
 // (distance and pose) is taken against the truth it leaves.
+// `estimate_readers`: 2 reads the estimates in two parts on two threads and
+// connections, 1 in one part on this thread; both give the same RunData.
 RunData load_run(const std::string& database, std::optional<std::int64_t> run_id,
-                 const std::function<void(RunData&)>& amend_truth = {});
+                 const std::function<void(RunData&)>& amend_truth = {}, int estimate_readers = 2);
 
 // The SQL of the passes over estimates and detections (for the plan test).
 extern const char* const kEstimateIdsQuery;

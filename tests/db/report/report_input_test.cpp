@@ -205,6 +205,129 @@ TEST(ReportInput, RowsStoredOutOfPlanOrderLoadAsInPlanOrder) {
   }
 }
 
+// Equal bits, NaN equal to NaN: the same rows read through the same
+// arithmetic give the same doubles whichever pass read them.
+bool same_double(double a, double b) {
+  return (std::isnan(a) && std::isnan(b)) || a == b;
+}
+
+void expect_same_samples(const db::report::EstimateSample& a, const db::report::EstimateSample& b,
+                         const std::string& where) {
+  EXPECT_EQ(a.position, b.position) << where;
+  EXPECT_EQ(a.frame, b.frame) << where;
+  EXPECT_EQ(a.status, b.status) << where;
+  for (const auto& [x, y] : {std::pair{a.distance_m, b.distance_m},
+                             {a.reprojection_px, b.reprojection_px},
+                             {a.generalization_px, b.generalization_px},
+                             {a.time_us, b.time_us},
+                             {a.ambiguity_ratio, b.ambiguity_ratio},
+                             {a.error_x_m, b.error_x_m},
+                             {a.error_y_m, b.error_y_m},
+                             {a.error_z_m, b.error_z_m},
+                             {a.rotation_error_deg, b.rotation_error_deg}})
+    EXPECT_TRUE(same_double(x, y)) << where << ": " << x << " vs " << y;
+}
+
+// Every estimate, flip and detector of two loads of one run, compared.
+void expect_same_run_data(const db::report::RunData& a, const db::report::RunData& b) {
+  ASSERT_EQ(a.solvers.size(), b.solvers.size());
+  for (std::size_t i = 0; i < a.solvers.size(); ++i) {
+    const auto& sa = a.solvers[i];
+    const auto& sb = b.solvers[i];
+    const std::string where = sa.solver + "/" + sa.scope;
+    EXPECT_EQ(sa.solver, sb.solver);
+    EXPECT_EQ(sa.scope, sb.scope);
+    EXPECT_EQ(sa.failures_by_termination, sb.failures_by_termination) << where;
+    ASSERT_EQ(sa.samples.size(), sb.samples.size()) << where;
+    for (std::size_t k = 0; k < sa.samples.size(); ++k)
+      expect_same_samples(sa.samples[k], sb.samples[k], where + " #" + std::to_string(k));
+  }
+  ASSERT_EQ(a.flips.size(), b.flips.size());
+  for (const auto& [series, flips] : a.flips) {
+    ASSERT_EQ(flips.size(), b.flips.at(series).size()) << series;
+    for (std::size_t k = 0; k < flips.size(); ++k) {
+      EXPECT_EQ(flips[k].position, b.flips.at(series)[k].position) << series;
+      EXPECT_EQ(flips[k].angle_deg, b.flips.at(series)[k].angle_deg) << series;
+    }
+  }
+  ASSERT_EQ(a.detectors.size(), b.detectors.size());
+  for (std::size_t i = 0; i < a.detectors.size(); ++i) {
+    EXPECT_EQ(a.detectors[i].detector, b.detectors[i].detector);
+    EXPECT_EQ(a.detectors[i].views_found, b.detectors[i].views_found);
+    EXPECT_EQ(a.detectors[i].corners_vs_truth, b.detectors[i].corners_vs_truth);
+    EXPECT_EQ(a.detectors[i].misplaced, b.detectors[i].misplaced);
+  }
+}
+
+// A file of three runs where the middle one was stored out of plan order,
+// has failed positions and a second detector's estimates appended after
+// every other row (as a re-detection would add them): the run's rows are
+// then not one block, and other runs' rows lie around and among them.
+std::string awkward_file(db_test::ScratchDir& dir) {
+  const std::string path = dir.file("runs.db");
+  SyntheticRunSpec spec = small_spec();
+  spec.solvers = rig_test::paper_like_solvers();
+  rig_test::write_synthetic_run(path, spec);
+  spec.failed_positions = 2;
+  spec.stored_in_reverse = true;
+  rig_test::write_synthetic_run(path, spec);
+  spec.stored_in_reverse = false;
+  rig_test::write_synthetic_run(path, spec);
+  exec(path,
+       "INSERT INTO estimates (frame_id, solver, scope, r00, r01, r02, r10, r11, r12, r20, r21, "
+       "r22, tx_m, ty_m, tz_m, distance_m, reprojection_error_px, generalization_error_px, "
+       "iterations, converged, termination, time_us, ambiguity_ratio, detector) "
+       "SELECT e.frame_id, e.solver, e.scope, e.r00, e.r01, e.r02, e.r10, e.r11, e.r12, e.r20, "
+       "e.r21, e.r22, e.tx_m, e.ty_m, e.tz_m, e.distance_m + 1e-4, e.reprojection_error_px, "
+       "e.generalization_error_px, e.iterations, e.converged, e.termination, e.time_us, "
+       "e.ambiguity_ratio, 'aruco' FROM estimates e JOIN frames f ON f.id = e.frame_id "
+       "JOIN positions p ON p.id = f.position_id WHERE p.run_id = 2 ORDER BY e.id");
+  return path;
+}
+
+// The estimates read in two parts on two connections (the default) add up
+// to exactly what one pass over them reads: every sample in the same order
+// with the same bits, every flip, failure count and detector.
+TEST(ReportInput, TwoReadersLoadWhatOneReads) {
+  db_test::ScratchDir dir;
+  const std::string path = awkward_file(dir);
+  const db::report::RunData one = db::report::load_run(path, 2, {}, 1);
+  const db::report::RunData two = db::report::load_run(path, 2, {}, 2);
+  ASSERT_NE(one.run.description.primary_detector, "aruco");
+  bool has_second_detector = false;
+  for (const auto& s : one.solvers)
+    has_second_detector |= s.solver.find("@aruco") != std::string::npos;
+  EXPECT_TRUE(has_second_detector);
+  expect_same_run_data(one, two);
+}
+
+// A run that changes between the report's snapshot and the second reader's
+// (here: its last frame's estimates deleted and its end stamped again, as a
+// resume that retakes a position and ends would) is read whole in the
+// report's snapshot: the report shows the run as it was when it began.
+TEST(ReportInput, ARunChangedWhileBeingReadIsReadAsItWas) {
+  db_test::ScratchDir dir;
+  const std::string path = awkward_file(dir);
+  const db::report::RunData before = db::report::load_run(path, 2, {}, 1);
+  const auto change_the_run = [&](db::report::RunData&) {
+    exec(path,
+         "UPDATE runs SET ended_at = '2099-01-01T00:00:00.000Z' WHERE id = 2; "
+         "DELETE FROM estimates WHERE frame_id = (SELECT max(f.id) FROM frames f "
+         "JOIN positions p ON p.id = f.position_id WHERE p.run_id = 2)");
+  };
+  const db::report::RunData read = db::report::load_run(path, 2, change_the_run, 2);
+  EXPECT_EQ(read.run.ended_at, before.run.ended_at);
+  expect_same_run_data(before, read);
+  // The file did change: a load now sees fewer estimates.
+  const db::report::RunData after = db::report::load_run(path, 2, {}, 2);
+  std::size_t samples_before = 0, samples_after = 0;
+  for (const auto& s : before.solvers)
+    samples_before += s.samples.size();
+  for (const auto& s : after.solvers)
+    samples_after += s.samples.size();
+  EXPECT_LT(samples_after, samples_before);
+}
+
 // A detection with an infinite corner and a visible marker with an infinite
 // side (detector or simulator bugs) are left out and counted; the corner
 // noise, efficiency and marker-size figures stay finite.
