@@ -47,10 +47,11 @@ FramePool::Ticket FramePool::submit(cv::Mat image) {
 }
 
 vision::FrameMeasurement FramePool::take(Ticket& ticket) {
-  // The oldest queued frame first: with one thread that is the serial order.
+  // The oldest queued frame first: with one thread that is the serial order,
+  // and the ticket's own frame comes before any submitted after it.
   std::future<vision::FrameMeasurement>& m = ticket.measurement;
   while (m.wait_for(std::chrono::seconds(0)) != std::future_status::ready) {
-    if (!run_one_queued(ticket.sequence)) {
+    if (!run_one_queued()) {
       m.wait();
       break;
     }
@@ -58,11 +59,11 @@ vision::FrameMeasurement FramePool::take(Ticket& ticket) {
   return m.get();
 }
 
-bool FramePool::run_one_queued(std::uint64_t up_to) {
+bool FramePool::run_one_queued() {
   std::packaged_task<vision::FrameMeasurement()> task;
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    if (queue_.empty() || queue_.front().sequence > up_to) return false;
+    if (queue_.empty()) return false;
     task = std::move(queue_.front().task);
     queue_.pop_front();
   }

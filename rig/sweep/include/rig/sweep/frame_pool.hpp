@@ -15,10 +15,13 @@
 //
 // threads = 1 is the serial path: nothing runs in the background; take()
 // measures the frame on the caller's thread. threads = N > 1 starts N - 1
-// worker threads, and a caller waiting in take() measures the frames queued
-// up to its own itself (never later ones, which would hold up what the caller
-// does next), so N threads measure at most. Frames are started in submission
-// order.
+// worker threads, and a caller waiting in take() measures queued frames
+// itself, oldest first, its own before any submitted after it: so N threads
+// measure, and a caller whose frame a worker is measuring measures the next
+// one (the next position's, when they were handed over ahead) instead of
+// waiting. Its take() then returns when that frame is done: at most one
+// frame's measurement later than its own was ready. Frames are started in
+// submission order.
 #pragma once
 
 #include <condition_variable>
@@ -63,17 +66,15 @@ class FramePool {
   Ticket submit(cv::Mat image);
 
   // The measurement of `ticket`, waiting for it; while it waits, the caller
-  // measures the frames still queued that were submitted before it (its own
-  // included). Rethrows what measure() threw (e.g.
-  // std::invalid_argument for an image type the detector cannot read).
-  // Precondition: ticket came from this pool's submit() and was not taken.
-  // A ticket that is dropped instead is measured all the same, and the
-  // result discarded.
+  // measures the frames still queued, oldest first (its own included). Rethrows what measure()
+  // threw (e.g. std::invalid_argument for an image type the detector cannot read). Precondition:
+  // ticket came from this pool's submit() and was not taken. A ticket that is dropped instead is
+  // measured all the same, and the result discarded.
   vision::FrameMeasurement take(Ticket& ticket);
 
  private:
   void work();
-  bool run_one_queued(std::uint64_t up_to);
+  bool run_one_queued();
 
   const vision::FrameMeasurer& measurer_;
   const int threads_;
