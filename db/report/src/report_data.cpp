@@ -68,6 +68,7 @@ const char* const kRunVersionQuery =
     "(SELECT count(*) FROM positions WHERE run_id = ?1), "
     "(SELECT max(id) FROM positions WHERE run_id = ?1), "
     "(SELECT max(id) FROM estimates) FROM runs WHERE id = ?1";
+constexpr int kRunVersionColumns = 6;
 
 const char* const kFramesQuery =
     "SELECT p.plan_index, f.frame_index, f.id FROM positions p "
@@ -594,7 +595,7 @@ RunVersion run_version(store::sqlite::Connection& connection, std::int64_t run_i
   select.bind(1, run_id);
   RunVersion version;
   if (select.step()) {
-    for (int c = 0; c < 6; ++c)
+    for (int c = 0; c < kRunVersionColumns; ++c)
       version.push_back(select.get_optional_text(c));
   }
   return version;

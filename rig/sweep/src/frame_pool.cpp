@@ -36,11 +36,10 @@ FramePool::~FramePool() {
 FramePool::Ticket FramePool::submit(cv::Mat image) {
   std::packaged_task<vision::FrameMeasurement()> task(
       [this, image = std::move(image)] { return measurer_.measure(image); });
-  Ticket ticket{task.get_future(), 0};
+  Ticket ticket{task.get_future()};
   {
     const std::lock_guard<std::mutex> lock(mutex_);
-    ticket.sequence = submitted_++;
-    queue_.push_back({std::move(task), ticket.sequence});
+    queue_.push_back(std::move(task));
   }
   queued_.notify_one();
   return ticket;
@@ -64,7 +63,7 @@ bool FramePool::run_one_queued() {
   {
     const std::lock_guard<std::mutex> lock(mutex_);
     if (queue_.empty()) return false;
-    task = std::move(queue_.front().task);
+    task = std::move(queue_.front());
     queue_.pop_front();
   }
   task();  // an exception is stored in the ticket
@@ -78,7 +77,7 @@ void FramePool::work() {
       std::unique_lock<std::mutex> lock(mutex_);
       queued_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
       if (stopping_) return;
-      task = std::move(queue_.front().task);
+      task = std::move(queue_.front());
       queue_.pop_front();
     }
     task();

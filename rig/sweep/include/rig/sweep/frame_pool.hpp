@@ -25,7 +25,6 @@
 #pragma once
 
 #include <condition_variable>
-#include <cstdint>
 #include <deque>
 #include <future>
 #include <mutex>
@@ -45,7 +44,6 @@ class FramePool {
   // A submitted frame's measurement, to be taken once with take().
   struct Ticket {
     std::future<vision::FrameMeasurement> measurement;
-    std::uint64_t sequence = 0;  // submission order
   };
 
   // Measures with `measurer`, which must outlive the pool. Precondition:
@@ -66,9 +64,10 @@ class FramePool {
   Ticket submit(cv::Mat image);
 
   // The measurement of `ticket`, waiting for it; while it waits, the caller
-  // measures the frames still queued, oldest first (its own included). Rethrows what measure()
-  // threw (e.g. std::invalid_argument for an image type the detector cannot read). Precondition:
-  // ticket came from this pool's submit() and was not taken. A ticket that is dropped instead is
+  // measures the frames still queued, oldest first (its own included).
+  // Rethrows what measure() threw (e.g. std::invalid_argument for an image
+  // type the detector cannot read). Precondition: ticket came from this
+  // pool's submit() and was not taken. A ticket that is dropped instead is
   // measured all the same, and the result discarded.
   vision::FrameMeasurement take(Ticket& ticket);
 
@@ -80,12 +79,7 @@ class FramePool {
   const int threads_;
   std::mutex mutex_;
   std::condition_variable queued_;
-  struct Job {
-    std::packaged_task<vision::FrameMeasurement()> task;
-    std::uint64_t sequence;
-  };
-  std::deque<Job> queue_;
-  std::uint64_t submitted_ = 0;
+  std::deque<std::packaged_task<vision::FrameMeasurement()>> queue_;  // in submission order
   bool stopping_ = false;
   std::vector<std::thread> workers_;
 };
