@@ -179,7 +179,7 @@ TEST_F(DetectorInput, ReadImageNamesAFileThatIsNotAnImage) {
   const std::string text = "camera calibration notes, not an image\n";
   write_bytes(p, std::vector<uchar>(text.begin(), text.end()));
   EXPECT_EQ(read_error(p), "image '" + p.string() +
-                               "': is not an image OpenCV can decode (expected PNG, JPEG, TIFF, "
+                               "': is not an image rig reads (expected PNG, JPEG, TIFF, "
                                "PGM/PPM or BMP)");
 }
 

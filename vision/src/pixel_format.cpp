@@ -7,6 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
+#include "vision/detector_image.hpp"
+
 namespace vision {
 namespace {
 
@@ -149,12 +151,20 @@ cv::Mat v4l2_buffer_to_image(const void* data, size_t used, int width, int heigh
   const auto* in = static_cast<const uint8_t*>(data);
   if (fourcc_code == fourcc::kMjpeg) {
     if (in == nullptr || used == 0) throw PixelFormatError(who + ": empty buffer");
+    // The size the JPEG declares must be the negotiated one before it is
+    // decoded: a damaged frame must not make the decoder allocate more.
+    try {
+      const ImageHeader h = read_image_header(in, used, who);
+      if (h.format != "JPEG" || h.width != width || h.height != height)
+        throw PixelFormatError(who + ": the buffer's " + h.format + " declares " +
+                               std::to_string(h.width) + " x " + std::to_string(h.height) +
+                               " pixels");
+    } catch (const ImageError& e) {
+      throw PixelFormatError(std::string(e.what()) + " (the buffer does not decode as a JPEG)");
+    }
     const cv::Mat bytes(1, static_cast<int>(used), CV_8UC1, const_cast<uint8_t*>(in));
     cv::Mat gray = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
     if (gray.empty()) throw PixelFormatError(who + ": the buffer does not decode as a JPEG");
-    if (gray.cols != width || gray.rows != height)
-      throw PixelFormatError(who + ": the JPEG decodes to " + std::to_string(gray.cols) + " x " +
-                             std::to_string(gray.rows));
     return gray;
   }
   int pixel_bytes = 0, type = -1;

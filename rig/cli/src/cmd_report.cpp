@@ -30,6 +30,7 @@
 #include "db/store/sha256.hpp"
 #include "db/store/store.hpp"
 #include "report_truth.hpp"
+#include "vision/detector_image.hpp"
 
 namespace rig::cli {
 namespace {
@@ -90,8 +91,12 @@ std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord&
                                                    const std::string& bytes,
                                                    const db::report::FrameToShow& which) {
   const std::vector<unsigned char> data(bytes.begin(), bytes.end());
-  cv::Mat image = cv::imdecode(data, cv::IMREAD_COLOR);
-  if (image.empty()) return std::nullopt;
+  cv::Mat image;
+  try {
+    image = vision::decode_image(data, cv::IMREAD_COLOR, *f.image_path);
+  } catch (const vision::ImageError&) {
+    return std::nullopt;  // named by the caller: the frame is not an image
+  }
   const double scale = std::min(1.0, static_cast<double>(kPictureWidth) / image.cols);
   cv::Mat picture;
   cv::resize(image, picture, cv::Size(), scale, scale, cv::INTER_AREA);

@@ -15,6 +15,7 @@
 #include "db/store/sha256.hpp"
 #include "motion/errors.hpp"
 #include "rig/sweep/run_record.hpp"
+#include "vision/detector_image.hpp"
 
 namespace rig::sweep {
 namespace {
@@ -55,9 +56,12 @@ cv::Mat read_recorded_frame(const RecordedFrame& f, std::string& error) {
     return {};
   }
   const std::vector<unsigned char> data(bytes.begin(), bytes.end());
-  cv::Mat image = cv::imdecode(data, cv::IMREAD_UNCHANGED);
-  if (image.empty()) error = "recorded frame " + f.image_path + " does not decode as an image";
-  return image;
+  try {
+    return vision::decode_image(data, cv::IMREAD_UNCHANGED, "recorded frame " + f.image_path);
+  } catch (const vision::ImageError& e) {
+    error = e.what();
+    return {};
+  }
 }
 
 }  // namespace

@@ -98,7 +98,8 @@ constexpr uint32_t kMjpeg = make('M', 'J', 'P', 'G');
 // `bytes_per_line` is the driver's row stride (0: rows packed); `used` the
 // bytes the driver filled. Throws PixelFormatError naming the fourcc when it
 // is not one of these, when the buffer is shorter than height rows, or when
-// an MJPG frame does not decode to width x height.
+// an MJPG frame's JPEG header does not declare width x height (checked before
+// decoding) or its data does not decode.
 cv::Mat v4l2_buffer_to_image(const void* data, size_t used, int width, int height,
                              size_t bytes_per_line, uint32_t fourcc_code);
 

@@ -1,0 +1,18 @@
+// Image bytes (a file given to `rig detect`, a replayed or reported frame):
+// decoded, or refused with vision::ImageError. The header is read and bounded
+// first (vision::read_image_header), then OpenCV's decoders run on what it
+// accepted.
+#include <opencv2/imgcodecs.hpp>
+#include <vector>
+
+#include "fuzz_input.hpp"
+#include "vision/detector_image.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  const std::vector<std::uint8_t> bytes(data, data + size);
+  try {
+    (void)vision::decode_image(bytes, cv::IMREAD_UNCHANGED, "image 'fuzz input'");
+  } catch (const vision::ImageError&) {
+  }
+  return 0;
+}
