@@ -23,6 +23,7 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "detector_internal.hpp"
 
@@ -54,14 +55,39 @@ struct SideFit {
 };
 
 // Reads the profile through `centre` along `normal` (image, unit, outward) at
-// offsets -inner .. +outer.
+// offsets -inner .. +outer, bilinearly interpolated (sample_bilinear's
+// convention). The samples lie on a line at a constant step, so the position
+// advances in fixed point (32 fractional bits: under 1e-8 px of drift over a
+// profile) and the interpolation runs on integers with weights rounded to 16
+// bits (within 2 x 255 / 2^17 = 0.004 grey levels of the exact value: far
+// below the sensor's noise). Precondition: every sample inside the image
+// (edge_window).
 void read_profile(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eigen::Vector2d& normal,
                   double inner, double outer, std::vector<double>* values) {
   const int n = static_cast<int>(std::lround((inner + outer) / kProfileStepPx)) + 1;
   values->resize(n);
-  for (int j = 0; j < n; ++j) {
-    const Eigen::Vector2d q = centre + (-inner + j * kProfileStepPx) * normal;
-    (*values)[j] = sample_bilinear(gray, q.x(), q.y());
+  constexpr double kOne = 4294967296.0;  // 2^32
+  const Eigen::Vector2d start = centre - inner * normal;
+  // Half a weight unit ahead, so that truncating to 16 bits rounds.
+  constexpr std::int64_t kHalfWeight = std::int64_t{1} << 15;
+  std::int64_t x = std::llround(start.x() * kOne) + kHalfWeight;
+  std::int64_t y = std::llround(start.y() * kOne) + kHalfWeight;
+  const std::int64_t dx = std::llround(kProfileStepPx * normal.x() * kOne);
+  const std::int64_t dy = std::llround(kProfileStepPx * normal.y() * kOne);
+  const std::int64_t last_col = gray.cols - 2, last_row = gray.rows - 2;
+  const std::size_t stride = gray.step[0];
+  const std::uint8_t* const data = gray.data;
+  double* const out = values->data();
+  for (int j = 0; j < n; ++j, x += dx, y += dy) {
+    std::int64_t x0 = x >> 32, y0 = y >> 32;
+    std::int64_t fx = (x >> 16) & 0xFFFF, fy = (y >> 16) & 0xFFFF;
+    if (x0 > last_col) x0 = last_col, fx = 0x10000;  // on the last column
+    if (y0 > last_row) y0 = last_row, fy = 0x10000;
+    const std::uint8_t* r0 = data + y0 * stride + x0;
+    const std::uint8_t* r1 = r0 + stride;
+    const std::int64_t top = (std::int64_t{r0[0]} << 16) + fx * (r0[1] - r0[0]);
+    const std::int64_t bottom = (std::int64_t{r1[0]} << 16) + fx * (r1[1] - r1[0]);
+    out[j] = static_cast<double>((top << 16) + fy * (bottom - top)) * (1.0 / kOne);
   }
 }
 
