@@ -99,6 +99,11 @@ double reach_inside(const cv::Mat& gray, const Eigen::Vector2d& from,
   if (!inside_image(gray, from, margin)) return -1;
   const double hi[2] = {gray.cols - 1 - margin, gray.rows - 1 - margin};
   double s = reach;
+  // Most profiles lie far from the border: a unit direction moves at most
+  // `reach` along each axis, so the whole reach is inside.
+  if (from.x() - reach >= margin && from.y() - reach >= margin && from.x() + reach <= hi[0] &&
+      from.y() + reach <= hi[1])
+    return std::floor(s / kProfileStepPx + 1e-9) * kProfileStepPx;
   for (int a = 0; a < 2; ++a) {
     if (direction[a] > 1e-12) s = std::min(s, (hi[a] - from[a]) / direction[a]);
     if (direction[a] < -1e-12) s = std::min(s, (margin - from[a]) / direction[a]);
