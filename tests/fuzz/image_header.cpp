@@ -2,10 +2,11 @@
 // decoded, or refused with vision::ImageError. The header is read and bounded
 // first (vision::read_image_header), then OpenCV's decoders run on what it
 // accepted.
+#include <cstddef>
+#include <cstdint>
 #include <opencv2/imgcodecs.hpp>
 #include <vector>
 
-#include "fuzz_input.hpp"
 #include "vision/detector_image.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -1,9 +1,11 @@
 // Image headers are read, and bounded, before any decoder sees the data.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstdint>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "vision/detector_image.hpp"
@@ -36,17 +38,14 @@ Bytes png_ihdr(std::uint32_t width, std::uint32_t height, int depth, int colour)
   return b;
 }
 
-// A little-endian TIFF whose first IFD holds ImageWidth and ImageLength as LONGs.
-Bytes tiff_of(std::uint32_t width, std::uint32_t height) {
-  Bytes b = {'I', 'I', 42, 0, 8, 0, 0, 0, 2, 0};
-  for (std::uint32_t tag : {256u, 257u}) {
-    const std::uint32_t value = tag == 256 ? width : height;
-    const std::uint8_t entry[] = {
-        static_cast<std::uint8_t>(tag), static_cast<std::uint8_t>(tag >> 8), 4, 0, 1, 0, 0, 0};
-    b.insert(b.end(), std::begin(entry), std::end(entry));
-    for (int shift = 0; shift < 32; shift += 8)
-      b.push_back(static_cast<std::uint8_t>(value >> shift));
-  }
+// A little-endian TIFF whose first IFD holds these LONG tags: {tag, count,
+// value or offset}.
+Bytes tiff_of(std::initializer_list<std::array<std::uint32_t, 3>> tags) {
+  Bytes b = {'I', 'I', 42, 0, 8, 0, 0, 0, static_cast<std::uint8_t>(tags.size()), 0};
+  for (const auto& [tag, count, value] : tags)
+    for (const auto& [v, bytes] : {std::pair{tag, 2}, {4u, 2}, {count, 4}, {value, 4}})
+      for (int i = 0; i < bytes; ++i)
+        b.push_back(static_cast<std::uint8_t>(v >> (8 * i)));
   return b;
 }
 
@@ -111,7 +110,8 @@ TEST(ImageHeader, AFileDeclaringMoreThanTheLimitIsRefusedBeforeDecoding) {
   // Sides whose product would overflow 64 bits are refused, not wrapped.
   EXPECT_NE(header_error(png_ihdr(0xFFFFFFFF, 0xFFFFFFFF, 8, 0)).find("4294967295 x 4294967295"),
             std::string::npos);
-  EXPECT_NE(header_error(tiff_of(70000, 70000)).find("TIFF header declares 70000 x 70000"),
+  EXPECT_NE(header_error(tiff_of({{256, 1, 70000}, {257, 1, 70000}}))
+                .find("TIFF header declares 70000 x 70000"),
             std::string::npos);
   EXPECT_NE(header_error(text("P5 4000000000 4000000000 255\n")).find("4000000000 x 4000000000"),
             std::string::npos);
@@ -141,6 +141,9 @@ TEST(ImageHeader, MalformedHeadersAreRefusedNamingTheInputAndTheFormat) {
        "(SOF marker)"},
       {{'I', 'I', 42, 0, 0xE8, 0x03, 0, 0},
        "image 'x': TIFF header points to a first IFD beyond the end of the data"},
+      {tiff_of({{256, 1, 4}, {257, 1, 4}, {277, 1, 0}}),
+       "image 'x': TIFF header declares 0 samples per pixel; expected 1 to 4"},
+      {tiff_of({{256, 1, 4}, {257, 3, 900}}), "image 'x': TIFF header has a tag value cut short"},
       {text("P5 12x 3 255\n"), "image 'x': PNM header has a width '12x'; expected a whole number"},
       {text("P5\n# a comment 9 9\n12"),
        "image 'x': PNM header has a height ''; expected a whole number"},
@@ -152,6 +155,9 @@ TEST(ImageHeader, MalformedHeadersAreRefusedNamingTheInputAndTheFormat) {
   };
   for (const auto& c : cases)
     EXPECT_EQ(header_error(c.bytes), c.expected);
+  // Only the four tags of the size are read: another tag's values may lie
+  // anywhere (here StripOffsets, 3 values at an offset past the end).
+  EXPECT_EQ(header_error(tiff_of({{256, 1, 4}, {257, 1, 4}, {273, 3, 900}})), "(accepted)");
 }
 
 }  // namespace

@@ -121,7 +121,8 @@ ImageHeader tiff_header(const Bytes& b, const std::string& name) {
     if (!read_uint(b, entry, 2, big, &tag) || !read_uint(b, entry + 2, 2, big, &type) ||
         !read_uint(b, entry + 4, 4, big, &values))
       refuse(name, "TIFF", "has an IFD cut short");
-    if (type != 3 && type != 4) continue;  // SHORT or LONG
+    const bool wanted = tag == 256 || tag == 257 || tag == 258 || tag == 277;
+    if (!wanted || (type != 3 && type != 4)) continue;  // SHORT or LONG
     const int size = type == 3 ? 2 : 4;
     // The first value: left-justified in the value field when all fit in its
     // 4 bytes, else at the offset the field holds.
@@ -137,8 +138,10 @@ ImageHeader tiff_header(const Bytes& b, const std::string& name) {
     if (tag == 258) h.bytes_per_sample = value > 8 ? 2 : 1;
     if (tag == 277) h.channels = static_cast<int>(std::min<std::uint32_t>(value, 5));
   }
-  if (h.channels > 4)
-    refuse(name, "TIFF", "declares more than 4 samples per pixel; expected 1 to 4");
+  if (h.channels < 1 || h.channels > 4)
+    refuse(name, "TIFF",
+           "declares " + std::string(h.channels < 1 ? "0" : "more than 4") +
+               " samples per pixel; expected 1 to 4");
   return h;
 }
 
