@@ -86,16 +86,19 @@ std::optional<std::string> saved_frame(const db::store::FrameRecord& f, std::str
 }
 
 // One frame scaled to kPictureWidth at most, each detection's corners A-D
-// (filled dots, joined) and its marker id drawn where the database says.
+// (filled dots, joined) and its marker id drawn where the database says;
+// nothing, with `why` set, when the bytes do not decode.
 std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord& f,
                                                    const std::string& bytes,
-                                                   const db::report::FrameToShow& which) {
+                                                   const db::report::FrameToShow& which,
+                                                   std::string& why) {
   const std::vector<unsigned char> data(bytes.begin(), bytes.end());
   cv::Mat image;
   try {
     image = vision::decode_image(data, cv::IMREAD_COLOR, *f.image_path);
-  } catch (const vision::ImageError&) {
-    return std::nullopt;  // named by the caller: the frame is not an image
+  } catch (const vision::ImageError& e) {
+    why = e.what();
+    return std::nullopt;
   }
   const double scale = std::min(1.0, static_cast<double>(kPictureWidth) / image.cols);
   cv::Mat picture;
@@ -155,10 +158,10 @@ std::vector<db::report::FramePicture> draw_pictures(const db::report::Report& re
     std::string reason;
     const std::optional<std::string> bytes = saved_frame(f, reason);
     std::optional<db::report::FramePicture> picture;
-    if (bytes) picture = draw_frame(f, *bytes, w);
+    if (bytes) picture = draw_frame(f, *bytes, w, reason);
     if (!bytes || !picture) {
       ++missing;
-      why = bytes ? *f.image_path + " is not an image" : reason;
+      why = reason;
       continue;
     }
     out.push_back(std::move(*picture));
