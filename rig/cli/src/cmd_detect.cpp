@@ -210,7 +210,8 @@ void add_detect_command(CLI::App& app, ExitStatus& status) {
       "detect", "Detect and identify the fiducials in images and run every pose solver on them");
   auto o = std::make_shared<Options>();
   cmd->add_option("images", o->images,
-                  "Image files (PNG, JPEG, TIFF, PGM, ...; 8/16-bit, grey or colour)")
+                  "Image files (PNG, JPEG, TIFF, PGM/PPM/PAM or BMP; 8/16-bit, grey or colour; "
+                  "at most 268 Mpx and 1 GiB decoded)")
       ->required();
   cmd->add_option("--camera", o->camera_file,
                   "Calibration file (OpenCV YAML/XML or ROS camera_info); default: the paper's "
@@ -230,9 +231,9 @@ void add_detect_command(CLI::App& app, ExitStatus& status) {
       "--target config/targets/paper.toml --json\n"
       "Estimates are given with scope = the pose marker's id (its four corners) and scope =\n"
       "\"target\" (all detected markers of the layout, pose marker first).\n"
-      "Exit codes: 0 ok, 2 bad input (an unreadable, empty, truncated or non-image file, an\n"
-      "image whose size is not the camera's, a bad calibration or target file); the other\n"
-      "images are still processed.");
+      "Exit codes: 0 ok, 2 bad input (an unreadable, empty, truncated, oversized or non-image\n"
+      "file, an image whose size is not the camera's, a bad calibration or target file); the\n"
+      "other images are still processed.");
   cmd->callback(
       [&status, o] { status.code = run_command("detect", [&] { return run_detect(*o); }); });
 }
