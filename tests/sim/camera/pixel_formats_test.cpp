@@ -257,7 +257,10 @@ TEST_F(PixelFormats, PacketSizeAndInterPacketDelayAreSet) {
   source.trigger();
   const vision::Frame frame = source.grab(kFrameWait);
   EXPECT_EQ(differing_pixels(frame.image, rendered()), 0);
-  EXPECT_EQ(source.counters().incomplete, 0u);
+  // An incomplete frame (a datagram dropped on a loaded host: the fake
+  // camera does not resend) is triggered again, never delivered: the one
+  // frame delivered is the render checked above.
+  EXPECT_EQ(source.counters().delivered, 1u);
 }
 
 // What a sweep over the distance range sees through each format: a lab

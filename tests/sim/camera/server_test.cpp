@@ -94,8 +94,14 @@ TEST_F(SimCamera, TriggeredFrameIsTheRenderOfTheBenchPosition) {
     cv::absdiff(frame.image, expected(x, 150, exposure.seed + 1), diff);
     EXPECT_LT(cv::mean(diff)[0], 3.0);
   }
-  EXPECT_EQ(source.counters().incomplete, 0u);
-  EXPECT_EQ(source.counters().lost, 0u);
+  // Aravis's fake GigE camera, under the simulated one, does not answer
+  // packet-resend requests: a datagram the loopback drops on a loaded host
+  // leaves a frame incomplete. The capture path must then trigger again and
+  // never deliver it (the busy-core test below holds the loopback itself to
+  // no loss): the two frames delivered are the renders checked above.
+  const vision::CaptureCounters c = source.counters();
+  EXPECT_EQ(c.delivered, 2u);
+  EXPECT_EQ(c.lost, 0u);
 }
 
 TEST_F(SimCamera, FrameExposedWhileTheBenchMovesIsBlurredAlongTheMove) {
