@@ -5,14 +5,12 @@
 #include <cstddef>
 #include <cstdint>
 #include <opencv2/imgcodecs.hpp>
-#include <vector>
 
 #include "vision/detector_image.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  const std::vector<std::uint8_t> bytes(data, data + size);
   try {
-    (void)vision::decode_image(bytes, cv::IMREAD_UNCHANGED, "image 'fuzz input'");
+    (void)vision::decode_image(data, size, cv::IMREAD_UNCHANGED, "image 'fuzz input'");
   } catch (const vision::ImageError&) {
   }
   return 0;

@@ -79,7 +79,8 @@ TEST(ImageHeader, EveryFormatDeclaresWhatItDecodesTo) {
       EXPECT_EQ(h.channels, decoded.channels()) << what;
       EXPECT_EQ(h.bytes_per_sample, static_cast<int>(decoded.elemSize1())) << what;
     }
-    EXPECT_EQ(vision::decode_image(bytes, cv::IMREAD_UNCHANGED, what).size(), decoded.size());
+    EXPECT_EQ(vision::decode_image(bytes.data(), bytes.size(), cv::IMREAD_UNCHANGED, what).size(),
+              decoded.size());
   }
 }
 
@@ -94,7 +95,7 @@ TEST(ImageHeader, AFileDeclaringMoreThanTheLimitIsRefusedBeforeDecoding) {
   }
   ASSERT_GT(16400LL * 16400, vision::kMaxImagePixels);
   try {
-    vision::decode_image(bomb, cv::IMREAD_UNCHANGED, "image 'bomb.png'");
+    vision::decode_image(bomb.data(), bomb.size(), cv::IMREAD_UNCHANGED, "image 'bomb.png'");
     FAIL() << "a " << bomb.size() << "-byte PNG of 16400 x 16400 pixels was decoded";
   } catch (const vision::ImageError& e) {
     EXPECT_STREQ(e.what(),

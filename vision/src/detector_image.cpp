@@ -4,23 +4,25 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <vector>
 
 namespace vision {
 namespace {
 
 // The data ends with the format's end marker (formats whose decoders accept
 // truncated data silently); true for other formats.
-bool has_end_marker(const std::vector<std::uint8_t>& b, const std::string& format) {
+bool has_end_marker(const std::uint8_t* b, std::size_t size, const std::string& format) {
   if (format == "PNG") {
     // The last chunk is IEND: length 0, type "IEND", CRC (12 bytes).
     static const std::uint8_t iend[] = {0, 0, 0, 0, 'I', 'E', 'N', 'D'};
-    return b.size() >= 12 && std::equal(std::begin(iend), std::end(iend), b.end() - 12);
+    return size >= 12 && std::equal(std::begin(iend), std::end(iend), b + size - 12);
   }
   if (format == "JPEG") {
     // EOI (FF D9), possibly followed by padding some writers append.
-    const size_t from = b.size() > 64 ? b.size() - 64 : 0;
-    for (size_t i = b.size() - 1; i > from; --i)
+    const size_t from = size > 64 ? size - 64 : 0;
+    for (size_t i = size - 1; i > from; --i)
       if (b[i - 1] == 0xFF && b[i] == 0xD9) return true;
     return false;
   }
@@ -29,15 +31,20 @@ bool has_end_marker(const std::vector<std::uint8_t>& b, const std::string& forma
 
 }  // namespace
 
-cv::Mat decode_image(const std::vector<std::uint8_t>& bytes, int imread_flags,
+cv::Mat decode_image(const std::uint8_t* data, std::size_t size, int imread_flags,
                      const std::string& name) {
-  if (bytes.empty()) throw ImageError(name + ": is empty (0 bytes)");
-  const ImageHeader header = read_image_header(bytes.data(), bytes.size(), name);
-  if (!has_end_marker(bytes, header.format))
+  if (data == nullptr || size == 0) throw ImageError(name + ": is empty (0 bytes)");
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    throw ImageError(name + ": is " + std::to_string(size >> 20) +
+                     " MiB; expected an image file under 2 GiB");
+  const ImageHeader header = read_image_header(data, size, name);
+  if (!has_end_marker(data, size, header.format))
     throw ImageError(name + ": is truncated (" + header.format +
                      " data ends before its end marker)");
   cv::Mat image;
   try {
+    // A header over the bytes, not a copy: imdecode only reads them.
+    const cv::Mat bytes(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
     image = cv::imdecode(bytes, imread_flags);
   } catch (const cv::Exception& e) {
     throw ImageError(name + ": cannot be decoded: " + e.what());
@@ -47,7 +54,7 @@ cv::Mat decode_image(const std::vector<std::uint8_t>& bytes, int imread_flags,
   return image;
 }
 
-cv::Mat read_image(const std::string& path) {
+cv::Mat read_image(const std::string& path, int imread_flags) {
   const std::string name = "image '" + path + "'";
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
@@ -60,7 +67,7 @@ cv::Mat read_image(const std::string& path) {
   if (!in) throw ImageError(name + ": cannot be opened (missing or unreadable)");
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());
-  return decode_image(bytes, cv::IMREAD_UNCHANGED, name);
+  return decode_image(bytes.data(), bytes.size(), imread_flags, name);
 }
 
 }  // namespace vision

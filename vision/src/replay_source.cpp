@@ -3,12 +3,9 @@
 #include <algorithm>
 #include <cctype>
 #include <filesystem>
-#include <fstream>
-#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 #include <system_error>
 #include <utility>
-#include <vector>
 
 #include "vision/detector_image.hpp"
 
@@ -57,17 +54,12 @@ Frame ReplaySource::grab(std::chrono::milliseconds /*timeout*/) {
     throw EndOfFrames(name(), "all " + std::to_string(paths_.size()) + " images delivered");
   const size_t index = next_++;
   const std::string& path = paths_[index];
-  const std::string image_name = "image " + std::to_string(index) + " '" + path + "'";
   cv::Mat image;
   try {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw ImageError(image_name + ": cannot be opened (missing or unreadable)");
-    const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                          std::istreambuf_iterator<char>());
-    image = decode_image(bytes, cv::IMREAD_GRAYSCALE, image_name);
+    image = read_image(path, cv::IMREAD_GRAYSCALE);
   } catch (const ImageError& e) {
     ++counters_.incomplete;
-    throw CaptureError(name(), e.what());
+    throw CaptureError(name(), "frame " + std::to_string(index) + ": " + e.what());
   }
   Frame frame;
   frame.image = std::move(image);

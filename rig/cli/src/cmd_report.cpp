@@ -92,10 +92,10 @@ std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord&
                                                    const std::string& bytes,
                                                    const db::report::FrameToShow& which,
                                                    std::string& why) {
-  const std::vector<unsigned char> data(bytes.begin(), bytes.end());
   cv::Mat image;
   try {
-    image = vision::decode_image(data, cv::IMREAD_COLOR, *f.image_path);
+    image = vision::decode_image(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(),
+                                 cv::IMREAD_COLOR, *f.image_path);
   } catch (const vision::ImageError& e) {
     why = e.what();
     return std::nullopt;

@@ -55,9 +55,9 @@ cv::Mat read_recorded_frame(const RecordedFrame& f, std::string& error) {
             "...; the file changed since it was recorded";
     return {};
   }
-  const std::vector<unsigned char> data(bytes.begin(), bytes.end());
   try {
-    return vision::decode_image(data, cv::IMREAD_UNCHANGED, "recorded frame " + f.image_path);
+    return vision::decode_image(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(),
+                                cv::IMREAD_UNCHANGED, "recorded frame " + f.image_path);
   } catch (const vision::ImageError& e) {
     error = e.what();
     return {};

@@ -6,9 +6,9 @@
 #include <cstddef>
 #include <cstdint>
 #include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
-#include <vector>
 
 namespace vision {
 
@@ -45,20 +45,20 @@ struct ImageHeader {
 // kMaxImageBytes.
 ImageHeader read_image_header(const std::uint8_t* data, std::size_t size, const std::string& name);
 
-// Decodes image bytes with cv::imdecode(`imread_flags`) after read_image_header
-// has accepted them; PNG and JPEG data must also end with their end marker
-// (IEND chunk, EOI marker), because their decoders return a partly grey image,
-// not an error, when the data is cut short. Throws ImageError naming `name`
-// when the bytes are empty, refused by read_image_header, truncated, or do
-// not decode.
-cv::Mat decode_image(const std::vector<std::uint8_t>& bytes, int imread_flags,
+// Decodes the `size` image bytes at `data` with cv::imdecode(`imread_flags`)
+// after read_image_header has accepted them; PNG and JPEG data must also end
+// with their end marker (IEND chunk, EOI marker), because their decoders
+// return a partly grey image, not an error, when the data is cut short.
+// Throws ImageError naming `name` when the bytes are empty, refused by
+// read_image_header, truncated, or do not decode.
+cv::Mat decode_image(const std::uint8_t* data, std::size_t size, int imread_flags,
                      const std::string& name);
 
-// Reads an image file as stored (8- or 16-bit, grey or colour, with or without
-// alpha), for Detector::detect, which converts it: decode_image on the file's
-// bytes with IMREAD_UNCHANGED. Throws ImageError naming `path` when the file
-// does not exist, is not a regular file or cannot be read, or when
+// Reads an image file: decode_image on its bytes with `imread_flags` (by
+// default as stored: 8- or 16-bit, grey or colour, with or without alpha, for
+// Detector::detect, which converts it). Throws ImageError naming `path` when
+// the file does not exist, is not a regular file or cannot be read, or when
 // decode_image refuses it.
-cv::Mat read_image(const std::string& path);
+cv::Mat read_image(const std::string& path, int imread_flags = cv::IMREAD_UNCHANGED);
 
 }  // namespace vision
