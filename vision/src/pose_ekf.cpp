@@ -4,11 +4,14 @@
 #include <cmath>
 #include <utility>
 
+#include "ekf_measurement.hpp"
 #include "vision/pose_analytic.hpp"
 
 namespace vision {
 namespace {
 
+using detail::EkfPoints;
+using detail::EulerTrig;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 Pose pose_from_state(const Vector6d& x) {
@@ -37,60 +40,44 @@ Vector6d state_difference(const Vector6d& a, const Vector6d& b) {
   return d;
 }
 
-// Eqs. 15-17 and 29: the measurement residual z - h(x) (undistorted pixels)
-// and its Jacobian H = dh/dx, accumulated straight into H^T H and H^T r (the
-// only products the update needs). With R = Rz(psi) Ry(theta) Rx(phi) and
-// Q = Ry Rx P: dR/dpsi P = e_z x (R P) = (-(RP)_y, (RP)_x, 0),
-// dR/dtheta P = Rz (e_y x Q) = (cos psi Q_z, sin psi Q_z, -Q_x),
-// dR/dphi P = R (e_x x P) = R (0, -P_z, P_y). The two rows of dh/dp are
-// fx/z (1, 0, -u) and fy/z (0, 1, -v) (u, v the projected point), so each row
-// of H is a handful of products, accumulated at fixed size.
-// Returns false when a point is on or behind the camera.
-bool measurement(const Correspondences& c, const Vector6d& x, Matrix6d* HtH, Vector6d* Htr,
-                 double* residual_squared) {
-  const Intrinsics& k = c.camera->intrinsics();
-  const double cz = std::cos(x(0)), sz = std::sin(x(0)), cy = std::cos(x(1)), sy = std::sin(x(1)),
-               cx = std::cos(x(2)), sx = std::sin(x(2));
-  // Ry Rx and R = Rz Ry Rx, written out.
-  Eigen::Matrix3d RyRx, R;
-  RyRx << cy, sy * sx, sy * cx, 0, cx, -sx, -sy, cy * sx, cy * cx;
-  R.row(0) = cz * RyRx.row(0) - sz * RyRx.row(1);
-  R.row(1) = sz * RyRx.row(0) + cz * RyRx.row(1);
-  R.row(2) = RyRx.row(2);
-  const Eigen::Vector3d t = x.tail<3>();
-  Matrix6d A = Matrix6d::Zero();
-  Vector6d g = Vector6d::Zero();
-  double sum_sq = 0;
-  for (size_t i = 0; i < c.size(); ++i) {
-    const Eigen::Vector3d& P = c.object_points[i];
-    const Eigen::Vector3d Q = RyRx * P;
-    const Eigen::Vector3d RP(cz * Q.x() - sz * Q.y(), sz * Q.x() + cz * Q.y(), Q.z());
-    const Eigen::Vector3d p = RP + t;
-    if (!(p.z() > 0)) return false;
-    const double inv_z = 1.0 / p.z();
-    const double u = p.x() * inv_z, v = p.y() * inv_z;
-    // Observed undistorted pixel minus predicted pixel.
-    const double r0 = k.fx * (c.normalized[i].x() - u), r1 = k.fy * (c.normalized[i].y() - v);
-    const Eigen::Vector3d d_phi = R.col(2) * P.y() - R.col(1) * P.z();
-    const double ax = k.fx * inv_z, by = k.fy * inv_z;
-    // The two rows of H: d(u, v)/d(psi, theta, phi, tx, ty, tz), pixels.
-    Vector6d h0, h1;
-    h0 << ax * (-RP.y()), ax * (cz * Q.z() + u * Q.x()), ax * (d_phi.x() - u * d_phi.z()), ax, 0,
-        -ax * u;
-    h1 << by * RP.x(), by * (sz * Q.z() + v * Q.x()), by * (d_phi.y() - v * d_phi.z()), 0, by,
-        -by * v;
-    // One outer product at a time: Eigen evaluates each in place, column by
-    // column in packed (SIMD) pairs, with no temporary.
-    A.noalias() += h0 * h0.transpose();
-    A.noalias() += h1 * h1.transpose();
-    g += r0 * h0;
-    g += r1 * h1;
-    sum_sq += r0 * r0 + r1 * r1;
+EulerTrig euler_trig(const Vector6d& x) {
+  EulerTrig t;
+  for (int k = 0; k < 3; ++k) {
+    t.s[k] = std::sin(x(k));
+    t.c[k] = std::cos(x(k));
   }
-  *HtH = A;
-  *Htr = g;
-  *residual_squared = sum_sq;
-  return true;
+  return t;
+}
+
+// The sines and cosines at x + step from those at x: the angle-addition
+// formulas with sin(s) and cos(s) - 1 of a small step as their Taylor series,
+// sin(x + s) = sin x + (sin x (cos s - 1) + cos x sin s), likewise cos. For
+// |s| <= 1/16 the first omitted terms are below s^11 / 11! = 1.5e-21 and
+// s^12 / 12! = 6e-24, so each update is exact to a few units in the last
+// place; along the at most max_iterations steps of one solve that stays below
+// ~1e-13, far inside the 1e-9 to which the iterates are defined
+// (tests/vision/pose_ekf_reference_test.cpp). A larger step takes the sine
+// and cosine of the new angle itself. About 30 instructions per angle,
+// against about 130 for std::sin and std::cos (callgrind).
+inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
+  EulerTrig t;
+  for (int k = 0; k < 3; ++k) {
+    const double s = step(k);
+    if (!(std::abs(s) <= 0.0625)) {
+      t.s[k] = std::sin(next(k));
+      t.c[k] = std::cos(next(k));
+      continue;
+    }
+    const double s2 = s * s;
+    const double sin_s =
+        s * (1 + s2 * (-1.0 / 6 + s2 * (1.0 / 120 + s2 * (-1.0 / 5040 + s2 * (1.0 / 362880)))));
+    const double cos_s_minus_1 =
+        s2 *
+        (-0.5 + s2 * (1.0 / 24 + s2 * (-1.0 / 720 + s2 * (1.0 / 40320 + s2 * (-1.0 / 3628800)))));
+    t.s[k] = at.s[k] + (at.s[k] * cos_s_minus_1 + at.c[k] * sin_s);
+    t.c[k] = at.c[k] + (at.c[k] * cos_s_minus_1 - at.s[k] * sin_s);
+  }
+  return t;
 }
 
 // The inverse of a symmetric 3x3 matrix in closed form (adjugate over
@@ -109,24 +96,30 @@ bool inverse3_symmetric(const Eigen::Matrix3d& m, Eigen::Matrix3d* inv) {
   return true;
 }
 
-// A symmetric positive-definite 6x6 system in 3x3 blocks (angles, translation),
-// A = [A11 A12; A12^T A22], eliminated through the Schur complement
-// S = A22 - A12^T A11^-1 A12 with both 3x3 inverses in closed form: no
-// pivoting (the blocks of a positive-definite matrix and its Schur complement
-// are positive definite), two divisions, short dependency chains.
+// A symmetric positive-definite 6x6 system in 3x3 blocks (angles,
+// translation), its diagonal multiplied by `diagonal_scale` (the
+// Levenberg-Marquardt damping, 1 + lambda): A = [A11 A12; A12^T A22],
+// eliminated through the Schur complement S = A22 - A12^T A11^-1 A12 with
+// both 3x3 inverses in closed form. No pivoting (the blocks of a
+// positive-definite matrix and its Schur complement are positive definite),
+// two divisions, short dependency chains. `ok` is false when a block is
+// singular to rounding.
 struct Spd6 {
   Eigen::Matrix3d inv11, inv_schur, W;  // W = A11^-1 A12
   Eigen::Matrix3d A21;
   bool ok = false;
 
-  explicit Spd6(const Matrix6d& A) {
-    const Eigen::Matrix3d A11 = A.topLeftCorner<3, 3>();
+  explicit Spd6(const Matrix6d& A, double diagonal_scale = 1.0) {
+    Eigen::Matrix3d A11 = A.topLeftCorner<3, 3>(), A22 = A.bottomRightCorner<3, 3>();
+    A11.diagonal() *= diagonal_scale;
+    A22.diagonal() *= diagonal_scale;
     A21 = A.bottomLeftCorner<3, 3>();
     if (!inverse3_symmetric(A11, &inv11)) return;
     W = inv11 * A21.transpose();
-    const Eigen::Matrix3d schur = A.bottomRightCorner<3, 3>() - A21 * W;
+    const Eigen::Matrix3d schur = A22 - A21 * W;
     ok = inverse3_symmetric(schur, &inv_schur);
   }
+  // A^-1 b (of the scaled A).
   Vector6d solve(const Vector6d& b) const {
     const Eigen::Vector3d y1 = inv11 * b.head<3>();
     const Eigen::Vector3d x2 = inv_schur * (b.tail<3>() - A21 * y1);
@@ -136,20 +129,23 @@ struct Spd6 {
   }
 };
 
-// A^-1 b for the symmetric positive-definite A (LDLT when a block is singular).
-Vector6d solve_spd(const Matrix6d& A, const Vector6d& b) {
-  const Spd6 blocks(A);
-  if (blocks.ok) return blocks.solve(b);
-  return A.ldlt().solve(b);
+// A^-1 b for the symmetric positive-definite A, its diagonal multiplied by
+// `diagonal_scale` (Eigen's pivoting LDLT when a pivot fails).
+inline Vector6d solve_spd(const Matrix6d& A, const Vector6d& b, double diagonal_scale = 1.0) {
+  const Spd6 factors(A, diagonal_scale);
+  if (factors.ok) return factors.solve(b);
+  Matrix6d scaled = A;
+  scaled.diagonal() *= diagonal_scale;
+  return scaled.ldlt().solve(b);
 }
 
 // A^-1 of the symmetric positive-definite A, column by column.
 Matrix6d inverse_spd(const Matrix6d& A) {
-  const Spd6 blocks(A);
-  if (!blocks.ok) return A.ldlt().solve(Matrix6d::Identity());
+  const Spd6 factors(A);
+  if (!factors.ok) return A.ldlt().solve(Matrix6d::Identity());
   Matrix6d inverse;
   for (int j = 0; j < 6; ++j)
-    inverse.col(j) = blocks.solve(Vector6d::Unit(j));
+    inverse.col(j) = factors.solve(Vector6d::Unit(j));
   return inverse;
 }
 
@@ -160,35 +156,61 @@ Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
   return d.asDiagonal();
 }
 
-// The measurement system at one state and the filter's cost there.
+// The measurement system at one state, the filter's cost there, the prior's
+// pull P^-1 (x - x_prior) (its gradient), and the state's sines and cosines
+// (the next trial state's start from them).
 struct Linearisation {
   Matrix6d HtH;
   Vector6d Htr;
+  Vector6d prior_pull;
   double cost = 0;
+  EulerTrig trig;
 };
 
 // The filter's MAP cost, which the update minimises:
 //   inv_r |z - h(x)|^2 + (x - x_prior)^T P^-1 (x - x_prior).
 struct MapCost {
-  const Correspondences& c;
+  EkfPoints points;
+  detail::EkfMeasurement measurement;
   Vector6d x_prior;
   Matrix6d prior_information;  // P^-1
+  bool prior_is_diagonal;      // the fixed priors are; a carried one is not
   double inv_r;                // R^-1 = 1 / sigma^2, px^-2
+  size_t size;                 // points
 
+  // The system at `state`, whose sines and cosines `at->trig` already holds.
   // False when a point is on or behind the camera.
   bool evaluate(const Vector6d& state, Linearisation* at) const {
     double residual_squared = 0;
-    if (!measurement(c, state, &at->HtH, &at->Htr, &residual_squared)) return false;
+    if (!measurement(points, state, at->trig, &at->HtH, &at->Htr, &residual_squared)) return false;
     const Vector6d d = state_difference(state, x_prior);
-    at->cost = inv_r * residual_squared + d.dot(prior_information * d);
+    if (prior_is_diagonal)
+      at->prior_pull = prior_information.diagonal().cwiseProduct(d);
+    else
+      at->prior_pull = prior_information * d;
+    at->cost = inv_r * residual_squared + d.dot(at->prior_pull);
     return true;
+  }
+  // The update's information matrix P^-1 + R^-1 H^T H at a state.
+  Matrix6d information(const Linearisation& at) const {
+    if (!prior_is_diagonal) return prior_information + inv_r * at.HtH;
+    Matrix6d sum = inv_r * at.HtH;
+    sum.diagonal() += prior_information.diagonal();
+    return sum;
   }
 };
 
 MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
-                 const EkfOptions& options) {
-  return {c, state_from_pose(prior), inverse_spd(prior_covariance),
-          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px)};
+                 const EkfOptions& options, EkfInstructionSet set) {
+  const Matrix6d information = inverse_spd(prior_covariance);
+  const bool diagonal = (information - Matrix6d(information.diagonal().asDiagonal())).isZero(0);
+  return {EkfPoints(c),
+          detail::ekf_measurement(set),
+          state_from_pose(prior),
+          information,
+          diagonal,
+          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px),
+          c.size()};
 }
 
 // Levenberg-Marquardt damping of the Gauss-Newton step and its schedule,
@@ -210,26 +232,28 @@ struct DampedStep {
 // 2.21), which stops the zig-zag of full steps across the curved valley
 // between planar poses. `next` receives the system at x + step (written in
 // place: the caller swaps it with `at`, no 6x6 copies per iteration).
-DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisation& at,
-                       const Matrix6d& information, const Vector6d& gradient, Damping* damping,
-                       Linearisation* next) {
+inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisation& at,
+                              const Matrix6d& information, const Vector6d& gradient,
+                              Damping* damping, Linearisation* next) {
   DampedStep out;
   while (damping->lambda <= 1e10) {
-    Matrix6d damped = information;
-    damped.diagonal() *= 1.0 + damping->lambda;
-    out.step = solve_spd(damped, gradient);
+    out.step = solve_spd(information, gradient, 1.0 + damping->lambda);
     if (!out.step.allFinite()) break;
     const double predicted = 2 * out.step.dot(gradient) - out.step.dot(information * out.step);
     // A step the model does not predict to lower the cost is refused without
     // evaluating it.
-    if (predicted > 0 && map.evaluate(x + out.step, next) && next->cost <= at.cost) {
-      const double gain = (at.cost - next->cost) / predicted;
-      if (gain > 0) {
-        out.accepted = true;
-        const double ratio = 2 * gain - 1;
-        damping->lambda *= std::max(1.0 / 3.0, 1.0 - ratio * ratio * ratio);
-        damping->growth = 2;
-        break;
+    if (predicted > 0) {
+      const Vector6d trial = x + out.step;
+      next->trig = euler_trig_after(at.trig, out.step, trial);
+      if (map.evaluate(trial, next) && next->cost <= at.cost) {
+        const double gain = (at.cost - next->cost) / predicted;
+        if (gain > 0) {
+          out.accepted = true;
+          const double ratio = 2 * gain - 1;
+          damping->lambda *= std::max(1.0 / 3.0, 1.0 - ratio * ratio * ratio);
+          damping->growth = 2;
+          break;
+        }
       }
     }
     damping->lambda *= damping->growth;
@@ -238,17 +262,89 @@ DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisatio
   return out;
 }
 
+// Where the updates stopped: the state, the information matrix of the last
+// update, how many updates, and why they stopped.
+struct Updates {
+  Vector6d x;
+  Matrix6d information;
+  int iterations = 0;
+  Termination termination = Termination::kMaxIterations;
+};
+
+// The measurement update (eqs. 25-28), relinearised about the current state
+// until it stops moving, from the system `at` at the prior mean. Written in
+// information form, which gives the same state and covariance as the gain
+// form (K = P H^T (H P H^T + R)^-1) while inverting a 6x6 matrix instead of a
+// 2N x 2N one:
+//   P+ = (P^-1 + H^T R^-1 H)^-1,
+//   x_{i+1} = x_i + P+ (H^T R^-1 (z - h(x_i)) - P^-1 (x_i - x_prior)).
+// The update minimises the filter's MAP cost; a Gauss-Newton step that would
+// raise it (a poor start, or the curved valley between the two planar poses)
+// is damped Levenberg-Marquardt style instead of taken: the damped iterated
+// EKF (Bell & Cathey 1993 view the IEKF as Gauss-Newton), same fixed point
+// and posterior covariance.
+inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linearisation* at,
+                           Linearisation* next) {
+  Updates u;
+  u.x = map.x_prior;
+  u.information = map.prior_information;
+  Damping damping;
+  for (int it = 1; it <= options.max_iterations; ++it) {
+    u.iterations = it;
+    u.information = map.information(*at);
+    const Vector6d gradient = map.inv_r * at->Htr - at->prior_pull;
+    const DampedStep d = damped_step(map, u.x, *at, u.information, gradient, &damping, next);
+    if (!d.step.allFinite()) {
+      u.termination = Termination::kNumericalFailure;
+      return u;
+    }
+    if (!d.accepted || d.step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
+      // No step lowers the cost any more, or the step is negligible: the
+      // minimum, to rounding.
+      u.termination = Termination::kConverged;
+      if (d.accepted) u.x += d.step;
+      return u;
+    }
+    u.x += d.step;
+    std::swap(at, next);
+  }
+  return u;
+}
+
+// run_updates built for each instruction set, with everything it calls but
+// the measurement compiled into it.
+VISION_EKF_INLINE_ALL Updates run_updates_baseline(const MapCost& map, const EkfOptions& options,
+                                                   Linearisation* at, Linearisation* next) {
+  return run_updates(map, options, at, next);
+}
+
+#if defined(VISION_EKF_AVX2_FMA)
+VISION_EKF_AVX2_FMA Updates run_updates_avx2_fma(const MapCost& map, const EkfOptions& options,
+                                                 Linearisation* at, Linearisation* next) {
+  return run_updates(map, options, at, next);
+}
+#endif
+
+Updates run_updates(EkfInstructionSet set, const MapCost& map, const EkfOptions& options,
+                    Linearisation* at, Linearisation* next) {
+#if defined(VISION_EKF_AVX2_FMA)
+  if (set == EkfInstructionSet::kAvx2Fma) return run_updates_avx2_fma(map, options, at, next);
+#endif
+  (void)set;
+  return run_updates_baseline(map, options, at, next);
+}
+
 // Converged or not, and why, once the iterations have stopped at state x.
 // Consistency gate: a state that explains the corners far worse than the
 // measurement noise allows is a wrong local minimum, not a pose.
-void settle_termination(const Correspondences& c, const Vector6d& x, const EkfOptions& options,
+void settle_termination(const MapCost& map, const Vector6d& x, const EkfOptions& options,
                         Estimate* e) {
   if (e->termination == Termination::kConverged) {
     Matrix6d HtH;
     Vector6d Htr;
     double residual_squared = 0;
-    measurement(c, x, &HtH, &Htr, &residual_squared);
-    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(c.size())));
+    map.measurement(map.points, x, euler_trig(x), &HtH, &Htr, &residual_squared);
+    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(map.size)));
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
       e->message = "converged to a state whose residual (" + std::to_string(rms) +
                    " px RMS per coordinate) exceeds the gate of " +
@@ -268,54 +364,26 @@ void settle_termination(const Correspondences& c, const Vector6d& x, const EkfOp
 
 Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
                       const EkfOptions& options) {
-  // Measurement update (eqs. 25-28), relinearised about the current state until
-  // it stops moving. Written in information form, which gives the same state
-  // and covariance as the gain form (K = P H^T (H P H^T + R)^-1) while inverting
-  // a 6x6 matrix instead of a 2N x 2N one:
-  //   P+ = (P^-1 + H^T R^-1 H)^-1,
-  //   x_{i+1} = x_i + P+ (H^T R^-1 (z - h(x_i)) - P^-1 (x_i - x_prior)).
-  // The update minimises the filter's MAP cost; a Gauss-Newton step that
-  // would raise it (a poor start, or the curved valley between the two planar
-  // poses) is damped Levenberg-Marquardt style instead of taken: the damped
-  // iterated EKF (Bell & Cathey 1993 view the IEKF as Gauss-Newton), same
-  // fixed point and posterior covariance.
-  const MapCost map = map_cost(c, prior, prior_covariance, options);
-  Estimate e;
-  Vector6d x = map.x_prior;
-  Matrix6d information = map.prior_information;
+  const EkfInstructionSet set = detail::ekf_instruction_set(options.instruction_set);
+  const MapCost map = map_cost(c, prior, prior_covariance, options, set);
   Linearisation systems[2];
-  Linearisation *at = &systems[0], *next = &systems[1];
-  Damping damping;
-  e.termination = Termination::kMaxIterations;
-  if (!map.evaluate(x, at)) {
+  systems[0].trig = euler_trig(map.x_prior);
+  Estimate e;
+  if (!map.evaluate(map.x_prior, &systems[0])) {
     e.termination = Termination::kBehindCamera;
     e.message = "the prior state puts an object point behind the camera";
+    e.T_cam_target = pose_from_state(map.x_prior);
+    e.covariance = inverse_spd(map.prior_information);
+    return e;
   }
-  for (int it = 1; it <= options.max_iterations && e.termination == Termination::kMaxIterations;
-       ++it) {
-    e.iterations = it;
-    information = map.prior_information + map.inv_r * at->HtH;
-    const Vector6d gradient =
-        map.inv_r * at->Htr - map.prior_information * state_difference(x, map.x_prior);
-    const DampedStep d = damped_step(map, x, *at, information, gradient, &damping, next);
-    if (!d.step.allFinite()) {
-      e.termination = Termination::kNumericalFailure;
-      e.message = "the measurement update is singular";
-      break;
-    }
-    if (!d.accepted || d.step.cwiseAbs().maxCoeff() <= options.state_tolerance) {
-      // No step lowers the cost any more, or the step is negligible: the
-      // minimum, to rounding.
-      e.termination = Termination::kConverged;
-      if (d.accepted) x += d.step;
-      break;
-    }
-    x += d.step;
-    std::swap(at, next);
-  }
-  e.T_cam_target = pose_from_state(x);
-  e.covariance = inverse_spd(information);
-  settle_termination(c, x, options, &e);
+  const Updates u = run_updates(set, map, options, &systems[0], &systems[1]);
+  e.iterations = u.iterations;
+  e.termination = u.termination;
+  if (u.termination == Termination::kNumericalFailure)
+    e.message = "the measurement update is singular";
+  e.T_cam_target = pose_from_state(u.x);
+  e.covariance = inverse_spd(u.information);
+  settle_termination(map, u.x, options, &e);
   return e;
 }
 

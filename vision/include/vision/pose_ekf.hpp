@@ -17,9 +17,20 @@
 // hybrid_ekf (§2.3.3, Fig. 4) takes its prior mean from the analytic square pose.
 #pragma once
 
+#include <optional>
+
 #include "vision/pose_solver.hpp"
 
 namespace vision {
+
+// The instruction sets the filter's inner loops are built for: the baseline
+// the program is built for, and AVX2 with FMA (four corners in one
+// register, fused multiply-adds), chosen when the CPU runs it. Both give the
+// same iterates to rounding (tests/vision/pose_ekf_reference_test.cpp).
+enum class EkfInstructionSet { kBaseline, kAvx2Fma };
+
+// Whether this CPU runs `set`.
+bool cpu_runs(EkfInstructionSet set);
 
 struct EkfOptions {
   // Standard deviation of a corner measurement, pixels (R = sigma^2 I). Smaller
@@ -48,6 +59,9 @@ struct EkfOptions {
   // Consistency gate: a converged state whose RMS residual exceeds this many
   // measurement sigmas is a wrong local minimum and is reported converged = false.
   double gate_sigmas = 5.0;
+  // The build of the inner loops to run; unset, or one the CPU does not run:
+  // the fastest it runs. Tests set it to check each build.
+  std::optional<EkfInstructionSet> instruction_set;
 };
 
 class EkfSolver : public PoseSolver {

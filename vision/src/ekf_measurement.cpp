@@ -1,0 +1,234 @@
+#include "ekf_measurement.hpp"
+
+namespace vision::detail {
+namespace {
+
+// The element-wise comparison result of two Lanes: -1 (all bits) or 0.
+typedef long long LaneMask __attribute__((vector_size(32), aligned(8)));
+
+// The sums of the lanes of a, b, c and d, as the four lanes of *sums:
+// pairwise sums by shuffles, seven vector operations for four sums. (Vectors
+// pass by reference: by value, their calling convention would depend on the
+// instruction set.)
+inline void sums_of(const Lanes& a, const Lanes& b, const Lanes& c, const Lanes& d, Lanes* sums) {
+  const Lanes ab =
+      __builtin_shufflevector(a, b, 0, 4, 2, 6) + __builtin_shufflevector(a, b, 1, 5, 3, 7);
+  const Lanes cd =
+      __builtin_shufflevector(c, d, 0, 4, 2, 6) + __builtin_shufflevector(c, d, 1, 5, 3, 7);
+  *sums = __builtin_shufflevector(ab, cd, 0, 1, 4, 5) + __builtin_shufflevector(ab, cd, 2, 3, 6, 7);
+}
+
+}  // namespace
+
+EkfPoints::EkfPoints(const Correspondences& c)
+    : fx(c.camera->intrinsics().fx), fy(c.camera->intrinsics().fy) {
+  const size_t n = c.size();
+  blocks.resize((n + 3) / 4);
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    Block& block = blocks[b];
+    for (size_t lane = 0; lane < 4; ++lane) {
+      const size_t i = 4 * b + lane < n ? 4 * b + lane : n - 1;
+      block.X[lane] = c.object_points[i].x();
+      block.Y[lane] = c.object_points[i].y();
+      block.Z[lane] = c.object_points[i].z();
+      block.nx[lane] = c.normalized[i].x();
+      block.ny[lane] = c.normalized[i].y();
+      block.weight[lane] = 4 * b + lane < n ? 1.0 : 0.0;
+    }
+  }
+}
+
+namespace {
+
+// The 28 sums that make H^T H (lower triangle), H^T r and |r|^2, ordered in
+// the groups of four that sums_of reduces together.
+// clang-format off
+enum Term {
+  kRR00, kRR11, kRR22, kResidual,  // rotation block, diagonal; |r|^2
+  kRR10, kRR20, kRR21, kTT22,      // rotation block, off the diagonal; tz tz
+  kTX0, kTX1, kTX2, kTY0,          // translation rows x rotation columns
+  kTY1, kTY2, kTZ0, kTZ1,
+  kTZ2, kTT00, kTT11, kTT20,       // ...; translation block
+  kG0, kG1, kG2, kTT21,            // gradient, rotation; ty tz
+  kG3, kG4, kG5, kUnused,          // gradient, translation
+  kTerms
+};
+// clang-format on
+
+// The projection at a state: its rotation R = Rz(psi) Ry(theta) Rx(phi) by
+// the products of Ry Rx (m) and R (r) that the measurement uses, its
+// translation and the focal lengths.
+struct Projection {
+  double sz, cz;                                  // psi
+  double m00, m01, m02, m11, m12, m20, m21, m22;  // Ry Rx (m10 = 0)
+  double r01, r02, r11, r12, r21, r22;            // columns 1 and 2 of R
+  double tx, ty, tz, fx, fy;                      // translation, m; focal lengths, px
+
+  Projection(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig)
+      : sz(trig.s[0]), cz(trig.c[0]), tx(x(3)), ty(x(4)), tz(x(5)), fx(points.fx), fy(points.fy) {
+    const double sy = trig.s[1], cy = trig.c[1], sx = trig.s[2], cx = trig.c[2];
+    m00 = cy;
+    m01 = sy * sx;
+    m02 = sy * cx;
+    m11 = cx;
+    m12 = -sx;
+    m20 = -sy;
+    m21 = cy * sx;
+    m22 = cy * cx;
+    r01 = cz * m01 - sz * m11;
+    r02 = cz * m02 - sz * m12;
+    r11 = sz * m01 + cz * m11;
+    r12 = sz * m02 + cz * m12;
+    r21 = m21;
+    r22 = m22;
+  }
+};
+
+// One block's terms, lane by lane, into t[kTerms]; false when a point of it is
+// on or behind the camera. With Q = Ry Rx P: dR/dpsi P = e_z x (R P) =
+// (-(RP)_y, (RP)_x, 0), dR/dtheta P = Rz (e_y x Q) = (cos psi Q_z, sin psi
+// Q_z, -Q_x), dR/dphi P = R (e_x x P) = R (0, -P_z, P_y). The two rows of
+// dh/dp are fx/z (1, 0, -u) and fy/z (0, 1, -v) (u, v the projected point),
+// so the translation columns of H are those rows themselves, and every entry
+// of H^T H that involves them is a rotation column scaled by fx/z or fy/z, or
+// a sum of squares.
+inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t) {
+  const Lanes Qx = r.m00 * p.X + r.m01 * p.Y + r.m02 * p.Z;
+  const Lanes Qy = r.m11 * p.Y + r.m12 * p.Z;
+  const Lanes Qz = r.m20 * p.X + r.m21 * p.Y + r.m22 * p.Z;
+  const Lanes RPx = r.cz * Qx - r.sz * Qy, RPy = r.sz * Qx + r.cz * Qy;
+  const Lanes pz = Qz + r.tz;
+  const LaneMask in_front = (pz > 0) | (p.weight == 0);
+  if (!(in_front[0] && in_front[1] && in_front[2] && in_front[3])) return false;
+  const Lanes inv_z = 1.0 / pz;
+  const Lanes u = (RPx + r.tx) * inv_z, v = (RPy + r.ty) * inv_z;
+  // Observed minus predicted pixel; padding lanes weigh nothing.
+  const Lanes ax = r.fx * inv_z * p.weight, by = r.fy * inv_z * p.weight;
+  const Lanes e0 = r.fx * (p.nx - u) * p.weight, e1 = r.fy * (p.ny - v) * p.weight;
+  const Lanes dphi_x = r.r02 * p.Y - r.r01 * p.Z, dphi_y = r.r12 * p.Y - r.r11 * p.Z,
+              dphi_z = r.r22 * p.Y - r.r21 * p.Z;
+  // The rotation columns of the two rows of H, pixels per radian.
+  const Lanes a0 = -ax * RPy, a1 = ax * (r.cz * Qz + u * Qx), a2 = ax * (dphi_x - u * dphi_z);
+  const Lanes b0 = by * RPx, b1 = by * (r.sz * Qz + v * Qx), b2 = by * (dphi_y - v * dphi_z);
+  const Lanes axu = ax * u, byv = by * v;
+  t[kRR00] = a0 * a0 + b0 * b0;
+  t[kRR11] = a1 * a1 + b1 * b1;
+  t[kRR22] = a2 * a2 + b2 * b2;
+  t[kResidual] = e0 * e0 + e1 * e1;
+  t[kRR10] = a1 * a0 + b1 * b0;
+  t[kRR20] = a2 * a0 + b2 * b0;
+  t[kRR21] = a2 * a1 + b2 * b1;
+  t[kTT22] = axu * axu + byv * byv;
+  t[kTX0] = ax * a0;
+  t[kTX1] = ax * a1;
+  t[kTX2] = ax * a2;
+  t[kTY0] = by * b0;
+  t[kTY1] = by * b1;
+  t[kTY2] = by * b2;
+  t[kTZ0] = -(axu * a0 + byv * b0);
+  t[kTZ1] = -(axu * a1 + byv * b1);
+  t[kTZ2] = -(axu * a2 + byv * b2);
+  t[kTT00] = ax * ax;
+  t[kTT11] = by * by;
+  t[kTT20] = -(ax * axu);
+  t[kG0] = e0 * a0 + e1 * b0;
+  t[kG1] = e0 * a1 + e1 * b1;
+  t[kG2] = e0 * a2 + e1 * b2;
+  t[kTT21] = -(by * byv);
+  t[kG3] = e0 * ax;
+  t[kG4] = e1 * by;
+  t[kG5] = -(e0 * axu + e1 * byv);
+  t[kUnused] = Lanes{};
+  return true;
+}
+
+// The measurement (vision/src/ekf_measurement.hpp), built for whichever
+// instruction set its caller is.
+inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
+                    Eigen::Matrix<double, 6, 6>* HtH, Vector6d* Htr, double* residual_squared) {
+  const Projection r(points, x, trig);
+  Lanes t[kTerms];
+  if (!block_terms(points.blocks[0], r, t)) return false;
+  for (size_t b = 1; b < points.blocks.size(); ++b) {
+    Lanes more[kTerms];
+    if (!block_terms(points.blocks[b], r, more)) return false;
+    for (int k = 0; k < kTerms; ++k)
+      t[k] += more[k];
+  }
+  // The sums over the lanes, four at a time.
+  Lanes sums[kTerms / 4];
+  for (int k = 0; k < kTerms / 4; ++k)
+    sums_of(t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3], &sums[k]);
+  const auto sum = [&](Term k) { return sums[k / 4][k % 4]; };
+  Eigen::Matrix<double, 6, 6>& A = *HtH;
+  A(0, 0) = sum(kRR00);
+  A(1, 0) = sum(kRR10);
+  A(1, 1) = sum(kRR11);
+  A(2, 0) = sum(kRR20);
+  A(2, 1) = sum(kRR21);
+  A(2, 2) = sum(kRR22);
+  A(3, 0) = sum(kTX0);
+  A(3, 1) = sum(kTX1);
+  A(3, 2) = sum(kTX2);
+  A(4, 0) = sum(kTY0);
+  A(4, 1) = sum(kTY1);
+  A(4, 2) = sum(kTY2);
+  A(5, 0) = sum(kTZ0);
+  A(5, 1) = sum(kTZ1);
+  A(5, 2) = sum(kTZ2);
+  A(3, 3) = sum(kTT00);
+  A(4, 3) = 0;
+  A(4, 4) = sum(kTT11);
+  A(5, 3) = sum(kTT20);
+  A(5, 4) = sum(kTT21);
+  A(5, 5) = sum(kTT22);
+  A.triangularView<Eigen::StrictlyUpper>() = A.transpose();
+  *Htr << sum(kG0), sum(kG1), sum(kG2), sum(kG3), sum(kG4), sum(kG5);
+  *residual_squared = sum(kResidual);
+  return true;
+}
+
+bool measure_baseline(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
+                      Eigen::Matrix<double, 6, 6>* HtH, Vector6d* Htr, double* residual_squared) {
+  return measure(points, x, trig, HtH, Htr, residual_squared);
+}
+
+#if defined(VISION_EKF_AVX2_FMA)
+VISION_EKF_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x,
+                                          const EulerTrig& trig, Eigen::Matrix<double, 6, 6>* HtH,
+                                          Vector6d* Htr, double* residual_squared) {
+  return measure(points, x, trig, HtH, Htr, residual_squared);
+}
+#endif
+
+}  // namespace
+
+EkfMeasurement ekf_measurement(EkfInstructionSet set) {
+#if defined(VISION_EKF_AVX2_FMA)
+  if (set == EkfInstructionSet::kAvx2Fma) return measure_avx2_fma;
+#endif
+  (void)set;
+  return measure_baseline;
+}
+
+EkfInstructionSet ekf_instruction_set(std::optional<EkfInstructionSet> requested) {
+  static const EkfInstructionSet fastest = cpu_runs(EkfInstructionSet::kAvx2Fma)
+                                               ? EkfInstructionSet::kAvx2Fma
+                                               : EkfInstructionSet::kBaseline;
+  return requested && cpu_runs(*requested) ? *requested : fastest;
+}
+
+}  // namespace vision::detail
+
+namespace vision {
+
+bool cpu_runs(EkfInstructionSet set) {
+  if (set == EkfInstructionSet::kBaseline) return true;
+#if defined(VISION_EKF_AVX2_FMA)
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
+  return false;
+#endif
+}
+
+}  // namespace vision
