@@ -15,9 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <iterator>
 #include <memory>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
@@ -27,7 +25,7 @@
 
 #include "commands.hpp"
 #include "db/report/report.hpp"
-#include "db/store/sha256.hpp"
+#include "db/store/saved_frame.hpp"
 #include "db/store/store.hpp"
 #include "report_truth.hpp"
 #include "vision/detector_image.hpp"
@@ -68,21 +66,16 @@ const cv::Scalar kDetectionColour(0, 159, 230);
 // The saved frame's bytes, if the file is still there with the SHA-256 the
 // run stored; else why not (for the report's log).
 std::optional<std::string> saved_frame(const db::store::FrameRecord& f, std::string& why) {
-  if (!f.image_path) {
+  if (!f.image_path || !f.image_sha256) {
     why = "not saved";
     return std::nullopt;
   }
-  std::ifstream in(*f.image_path, std::ios::binary);
-  if (!in) {
-    why = *f.image_path + " cannot be read";
+  try {
+    return db::store::read_saved_frame(*f.image_path, *f.image_sha256);
+  } catch (const db::store::SavedFrameError& e) {
+    why = e.what();
     return std::nullopt;
   }
-  std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (f.image_sha256 && db::store::sha256_hex(bytes) != *f.image_sha256) {
-    why = *f.image_path + " has changed since the run saved it (SHA-256)";
-    return std::nullopt;
-  }
-  return bytes;
 }
 
 // One frame scaled to kPictureWidth at most, each detection's corners A-D

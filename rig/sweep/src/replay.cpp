@@ -1,18 +1,14 @@
 #include "rig/sweep/replay.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstring>
-#include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
-#include <sstream>
 #include <utility>
 
 #include "config/json.hpp"
-#include "db/store/sha256.hpp"
+#include "db/store/saved_frame.hpp"
 #include "motion/errors.hpp"
 #include "rig/sweep/run_record.hpp"
 #include "vision/detector_image.hpp"
@@ -36,32 +32,16 @@ std::string xy_text(double x_mm, double y_mm) {
 // stored one, then decoded unchanged. Returns an empty image and sets `error`
 // (naming the file and what is wrong) when any step fails.
 cv::Mat read_recorded_frame(const RecordedFrame& f, std::string& error) {
-  std::ifstream in(f.image_path, std::ios::binary);
-  if (!in) {
-    error = "cannot read recorded frame " + f.image_path + ": " + std::strerror(errno);
-    return {};
-  }
-  std::ostringstream buffer;
-  buffer << in.rdbuf();
-  if (in.bad()) {
-    error = "cannot read recorded frame " + f.image_path;
-    return {};
-  }
-  const std::string bytes = buffer.str();
-  const std::string actual = db::store::sha256_hex(bytes);
-  if (actual != f.image_sha256) {
-    error = "recorded frame " + f.image_path + " has SHA-256 " + actual.substr(0, 12) +
-            "... but the run stored " + f.image_sha256.substr(0, 12) +
-            "...; the file changed since it was recorded";
-    return {};
-  }
   try {
+    const std::string bytes = db::store::read_saved_frame(f.image_path, f.image_sha256);
     return vision::decode_image(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(),
                                 cv::IMREAD_UNCHANGED, "recorded frame " + f.image_path);
+  } catch (const db::store::SavedFrameError& e) {
+    error = e.what();
   } catch (const vision::ImageError& e) {
     error = e.what();
-    return {};
   }
+  return {};
 }
 
 }  // namespace
