@@ -3,8 +3,10 @@
 // distances over the simulated bench's travel), 3 frames each, the paper's
 // A4 target (4 markers), ~46 corners per position (~90,000 corners), 0.1 px corner noise,
 // written once through the run store.
-//  - BM_Calibrate: the bundle adjustment with the rank check and Ceres
-//    Covariance (what rig calibrate reports), 2 threads.
+//  - BM_Calibrate: the bundle adjustment with the rank check and the
+//    covariance clustered by position (what rig calibrate reports), 2
+//    threads. A run with saved frames adds their detection and a second
+//    solve (rig::calibrate::redetected), not measured here.
 //  - BM_HeldOutCheck: the second solve on the even positions and the prediction.
 // Run: scripts/bench bench_calibrate   (or build-*/tests/bench/bench_calibrate)
 #include <benchmark/benchmark.h>

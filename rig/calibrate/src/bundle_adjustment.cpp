@@ -2,6 +2,7 @@
 // corner, a Huber loss, one parameter block holding every unknown.
 #include <ceres/ceres.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/SVD>
@@ -149,19 +150,29 @@ std::vector<int> fixed_indices(const CalibrationOptions& options) {
   return fixed;
 }
 
-// The Jacobian at the solution as a dense matrix in the tangent space: the
-// free parameters' columns, in order (a fixed parameter has no column).
-Eigen::MatrixXd free_jacobian(ceres::Problem& problem) {
+// The system at the solution, with the Huber loss applied: the Jacobian as
+// a dense matrix in the tangent space (the free parameters' columns, in
+// order; a fixed parameter has no column) and the residuals (two per corner,
+// in the order of the problem's corners).
+struct Linearisation {
+  Eigen::MatrixXd J;
+  Eigen::VectorXd r;
+};
+
+Linearisation linearise(ceres::Problem& problem) {
   ceres::Problem::EvaluateOptions eval;
   eval.apply_loss_function = true;
   ceres::CRSMatrix crs;
-  problem.Evaluate(eval, nullptr, nullptr, nullptr, &crs);
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
+  std::vector<double> residuals;
+  problem.Evaluate(eval, nullptr, &residuals, nullptr, &crs);
+  Linearisation l{Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols),
+                  Eigen::Map<const Eigen::VectorXd>(residuals.data(),
+                                                    static_cast<Eigen::Index>(residuals.size()))};
   for (int row = 0; row < crs.num_rows; ++row)
     for (int k = crs.rows[static_cast<std::size_t>(row)];
          k < crs.rows[static_cast<std::size_t>(row) + 1]; ++k)
-      J(row, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
-  return J;
+      l.J(row, crs.cols[static_cast<std::size_t>(k)]) = crs.values[static_cast<std::size_t>(k)];
+  return l;
 }
 
 // Names the weakest direction of the column-scaled Jacobian when it is
@@ -217,27 +228,59 @@ void fill_statistics(const CalibrationProblem& problem, const Parameters& p,
   result->sigma_px = std::sqrt(sum / std::max(1.0, 2 * n - free));
 }
 
-void fill_covariance(ceres::Problem& problem, double* block, CalibrationResult* result,
-                     int threads) {
-  ceres::Covariance::Options options;
-  options.num_threads = threads;
-  options.algorithm_type = ceres::DENSE_SVD;
-  options.null_space_rank = 0;
-  ceres::Covariance covariance(options);
-  const std::vector<std::pair<const double*, const double*>> blocks = {{block, block}};
-  if (!covariance.Compute(blocks, &problem))
-    throw UnobservablePlan("the covariance of the parameters cannot be computed: the Jacobian " +
-                           std::string("at the solution is rank deficient"));
-  Eigen::Matrix<double, kParameterCount, kParameterCount, Eigen::RowMajor> C;
-  covariance.GetCovarianceBlock(block, block, C.data());
-  const double s2 = result->sigma_px * result->sigma_px;
+// The covariance of the free parameters (tangent space), two ways. With
+// B = (J^T J)^-1:
+//  - independent corners: sigma^2 B, every corner coordinate an independent
+//    error of sd sigma_px;
+//  - clustered by bench position (the sandwich estimator, White 1980; Liang &
+//    Zeger 1986): B M B, M = C / (C - 1) sum_c g_c g_c^T over the C
+//    positions, g_c = J_c^T r_c the score of position c's corners. The
+//    corners of one position share their errors' causes (the detector's bias
+//    under that position's blur, light and viewing angle, what the lens model
+//    leaves at those image points), so they are not independent; positions
+//    are. With fewer than kPositionsPerParameter positions per free parameter
+//    M is too poorly estimated and the first is used.
+constexpr int kPositionsPerParameter = 3;
+
+void fill_covariance(const CalibrationProblem& input, const Linearisation& l,
+                     CalibrationResult* result) {
+  const Eigen::Index free = l.J.cols();
+  const Eigen::MatrixXd B =
+      (l.J.transpose() * l.J).ldlt().solve(Eigen::MatrixXd::Identity(free, free));
+  std::map<std::int64_t, Eigen::VectorXd> scores;
+  for (std::size_t i = 0; i < input.corners.size(); ++i) {
+    const Eigen::Index row = 2 * static_cast<Eigen::Index>(i);
+    auto [it, added] = scores.try_emplace(input.corners[i].plan_index, Eigen::VectorXd::Zero(free));
+    it->second += l.J.middleRows(row, 2).transpose() * l.r.segment<2>(row);
+  }
+  const double clusters = static_cast<double>(scores.size());
+  const Eigen::MatrixXd independent = result->sigma_px * result->sigma_px * B;
+  Eigen::MatrixXd V = independent;
+  result->sd_method =
+      "independent corners (" + std::to_string(scores.size()) + " positions: too few to cluster)";
+  if (clusters >= kPositionsPerParameter * static_cast<double>(free)) {
+    Eigen::MatrixXd M = Eigen::MatrixXd::Zero(free, free);
+    for (const auto& [position, g] : scores)
+      M.noalias() += g * g.transpose();
+    V = B * (clusters / (clusters - 1) * M) * B;
+    result->sd_method =
+        "clustered by bench position (" + std::to_string(scores.size()) + " positions)";
+  }
   result->correlation = Eigen::MatrixXd::Identity(kParameterCount, kParameterCount);
+  std::vector<int> column(kParameterCount, -1);
+  for (int i = 0, c = 0; i < kParameterCount; ++i)
+    if (!result->parameters[static_cast<std::size_t>(i)].fixed)
+      column[static_cast<std::size_t>(i)] = c++;
   for (int i = 0; i < kParameterCount; ++i) {
+    const int a = column[static_cast<std::size_t>(i)];
+    if (a < 0) continue;
     auto& e = result->parameters[static_cast<std::size_t>(i)];
-    e.sd = e.fixed ? 0.0 : std::sqrt(std::max(0.0, C(i, i) * s2)) * output_scale(i);
+    e.sd = std::sqrt(std::max(0.0, V(a, a))) * output_scale(i);
+    e.sd_independent = std::sqrt(std::max(0.0, independent(a, a))) * output_scale(i);
     for (int j = 0; j < kParameterCount; ++j) {
-      if (i == j || C(i, i) <= 0 || C(j, j) <= 0) continue;
-      result->correlation(i, j) = C(i, j) / std::sqrt(C(i, i) * C(j, j));
+      const int b = column[static_cast<std::size_t>(j)];
+      if (i == j || b < 0 || V(a, a) <= 0 || V(b, b) <= 0) continue;
+      result->correlation(i, j) = V(a, b) / std::sqrt(V(a, a) * V(b, b));
     }
   }
 }
@@ -298,9 +341,10 @@ CalibrationResult calibrate(const CalibrationProblem& input, const CalibrationOp
   result.iterations = static_cast<int>(summary.iterations.size());
   result.termination = summary.BriefReport();
   fill_statistics(input, p, &result);
-  check_rank(free_jacobian(problem), is_fixed);
+  const Linearisation at_solution = linearise(problem);
+  check_rank(at_solution.J, is_fixed);
   result.correlation = Eigen::MatrixXd::Identity(kParameterCount, kParameterCount);
-  if (options.covariance) fill_covariance(problem, p.data(), &result, options.threads);
+  if (options.covariance) fill_covariance(input, at_solution, &result);
   result.solve_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

@@ -78,16 +78,22 @@ nlohmann::json statistics(const CalibrationProblem& problem, const CalibrationRe
   nlohmann::json j;
   j["source"] = std::filesystem::path(problem.source).filename().string();
   j["corners"] = r.corners;
+  j["corners_from"] = problem.corners_from;
   j["iterations"] = r.iterations;
   j["solve_seconds"] = r.solve_seconds;
   j["sigma_px"] = r.sigma_px;
+  j["sd_method"] = r.sd_method;
   j["rms_px"] = r.rms_px;
   j["termination"] = r.termination;
   nlohmann::json params = nlohmann::json::array();
   std::vector<std::string> names;
   for (const ParameterEstimate& e : r.parameters) {
-    params.push_back(
-        {{"name", e.name}, {"unit", e.unit}, {"value", e.value}, {"sd", e.sd}, {"fixed", e.fixed}});
+    params.push_back({{"name", e.name},
+                      {"unit", e.unit},
+                      {"value", e.value},
+                      {"sd", e.sd},
+                      {"sd_if_corners_independent", e.sd_independent},
+                      {"fixed", e.fixed}});
     names.push_back(e.name);
   }
   j["parameters"] = params;

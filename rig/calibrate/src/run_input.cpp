@@ -4,6 +4,7 @@
 #include <fstream>
 
 #include "config/reader.hpp"
+#include "corners.hpp"
 #include "db/store/store.hpp"
 #include "db/store/stored_file_copy.hpp"
 #include "rig/calibrate/calibration.hpp"
@@ -42,21 +43,23 @@ void read_stored_files(const db::store::Run& run, CalibrationProblem* p) {
   p->nominal_geometry = vision::RigGeometry::load(rig);
 }
 
-// The corners of the run's primary detector (RunDescription::primary_detector).
-void add_position(const db::store::PositionRecord& position, const std::string& detector,
-                  CalibrationProblem* p) {
-  for (const db::store::FrameRecord& frame : position.frames)
+// The corners of the run's primary detector (RunDescription::primary_detector)
+// and the frames they were found in, when the run saved them.
+void add_position(const db::store::PositionRecord& position, CalibrationProblem* p) {
+  const double x_mm = *position.measured_x_mm, y_mm = *position.measured_y_mm;
+  for (const db::store::FrameRecord& frame : position.frames) {
+    if (frame.image_path && frame.image_sha256)
+      p->frames.push_back(
+          {position.plan_index, x_mm, y_mm, *frame.image_path, *frame.image_sha256});
     for (const db::store::DetectionRecord& det : frame.detections) {
-      if (det.detector != detector || !p->target.has_marker(det.marker_id)) continue;
-      const std::array<Eigen::Vector3d, 4> corners = p->target.corners_m(det.marker_id);
-      for (int c = 0; c < 4; ++c) {
-        const Eigen::Vector2d px(det.corners_px[static_cast<std::size_t>(2 * c)],
-                                 det.corners_px[static_cast<std::size_t>(2 * c + 1)]);
-        if (!px.allFinite()) continue;
-        p->corners.push_back({position.plan_index, *position.measured_x_mm, *position.measured_y_mm,
-                              det.marker_id, c, corners[static_cast<std::size_t>(c)], px});
-      }
+      if (det.detector != p->detector || !p->target.has_marker(det.marker_id)) continue;
+      std::array<Eigen::Vector2d, 4> corners_px;
+      for (std::size_t c = 0; c < 4; ++c)
+        corners_px[c] = {det.corners_px[2 * c], det.corners_px[2 * c + 1]};
+      detail::append_corners(p->target, position.plan_index, x_mm, y_mm, det.marker_id, corners_px,
+                             &p->corners);
     }
+  }
 }
 
 }  // namespace
@@ -77,12 +80,13 @@ CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64
   CalibrationProblem p;
   p.source = db_path + ":" + std::to_string(run.id);
   read_stored_files(run, &p);
+  p.detector = run.description.primary_detector;
   for (const std::int64_t index : store->completed_position_indices(run.id)) {
     const db::store::PositionRecord position = store->position(run.id, index);
     if (position.status != db::store::PositionStatus::kOk || !position.measured_x_mm ||
         !position.measured_y_mm)
       continue;
-    add_position(position, run.description.primary_detector, &p);
+    add_position(position, &p);
   }
   if (p.corners.empty())
     throw CalibrationInputError(p.source + ": the run has no detections of the layout's markers " +

@@ -2,11 +2,14 @@
 // calibration sweep (rig/calibrate/calibration.hpp): the calibrated camera
 // (OpenCV FileStorage and ROS camera_info), the rig geometry file and
 // calibration.json (values, standard deviations, correlations, residuals per
-// position and marker, the held-out check), in DIR.
+// position and marker, the held-out check), in DIR. When the run saved its
+// frames, a second pass detects them again through the first pass's camera
+// and calibrates from those corners (--redetect).
 //
 // Exit codes: 0 written; 1 a failure while solving or writing; 2 bad input
 // (missing file, not a rig database, no such run, no detections, an
-// unobservable plan, an unknown --fix name or --distortion model).
+// unobservable plan, an unknown --fix name or --distortion model, --redetect
+// yes on a run that saved no frames, a saved frame missing or changed).
 #include <iomanip>
 #include <iostream>
 #include <memory>
@@ -26,6 +29,7 @@ struct CalibrateArgs {
   std::string distortion = "5";
   double huber_px = 1.0;
   int threads = 2;
+  std::string redetect = "auto";
 };
 
 // "runs.db:3" -> ("runs.db", 3); "runs.db" -> ("runs.db", none).
@@ -39,14 +43,21 @@ std::pair<std::string, std::optional<std::int64_t>> split_run(const std::string&
 
 int run_calibrate(const CalibrateArgs& a) {
   const auto [path, run] = split_run(a.database);
-  const calibrate::CalibrationProblem problem = calibrate::read_run(path, run);
+  calibrate::CalibrationProblem problem = calibrate::read_run(path, run);
   calibrate::CalibrationOptions options;
   options.fixed = a.fixed;
   options.distortion = a.distortion == "5" ? calibrate::DistortionModel::kBrownConrady5
                                            : calibrate::DistortionModel::kThinPrism;
   options.huber_px = a.huber_px;
   options.threads = a.threads;
-  const calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
+  calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
+  if (a.redetect == "yes" || (a.redetect == "auto" && !problem.frames.empty())) {
+    std::cout << problem.source << ": first pass on the run's detections, " << result.corners
+              << " corners, RMS " << std::setprecision(3) << result.rms_px << " px; detecting the "
+              << problem.frames.size() << " saved frames again through its camera\n";
+    problem = calibrate::redetected(problem, result.camera, a.threads);
+    result = calibrate::calibrate(problem, options);
+  }
   const calibrate::HeldOutCheck held_out = calibrate::held_out_check(problem, options);
   const calibrate::CalibrationFiles files =
       calibrate::write_calibration(a.out_dir, problem, result, held_out);
@@ -87,7 +98,13 @@ void add_calibrate_command(CLI::App& app, ExitStatus& status) {
   cmd->add_option("--huber-px", args->huber_px, "Robust loss scale, px")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--threads", args->threads, "Solver threads")
+  cmd->add_option("--redetect", args->redetect,
+                  "Detect the corners again through the first pass's camera and calibrate from "
+                  "them: auto (when the run saved its frames, [capture] save_frames), yes (it "
+                  "must have), no (the run's detections only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"auto", "yes", "no"}));
+  cmd->add_option("--threads", args->threads, "Solver and detection threads")
       ->capture_default_str()
       ->check(CLI::Range(1, 64));
   cmd->footer(

@@ -1,14 +1,15 @@
 // rig::calibrate against the simulated rig's hidden truth: for each of ten
 // truth seeds of the `lab` realism profile (camera, lens with thin-prism
 // and radial r^8 terms, mount, target pose and print scale drawn by
-// sim::camera), the
-// shipped calibration plan and A3 target rendered by the real renderer and
-// detected by the real detector with the nominal calibration
-// (tests/rig/calibrate/sim_truth_calibration.hpp), calibrated, compared with
-// the truth the simulator rendered with, under both lens models of rig
-// calibrate (--distortion 5 and thin_prism). Every other plan position (111
-// of 221, one frame each, ~8,500 corners per seed) keeps the ten seeds and
-// both models at about 35 s of CPU.
+// sim::camera), the shipped calibration plan and A3 target rendered by the
+// real renderer and detected by the real detector with the nominal
+// calibration (tests/rig/calibrate/sim_truth_calibration.hpp), calibrated in
+// two passes as `rig calibrate` does with a run's saved frames (the frames
+// detected again through the first pass's camera), compared with the truth
+// the simulator rendered with, under both lens models of rig calibrate
+// (--distortion 5 and thin_prism). Every other plan position (111 of 221, one
+// frame each, ~8,500 corners per seed) keeps the ten seeds and both models
+// at about 40 s of CPU.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -49,11 +50,19 @@ rig_test::SimTruthSweep render_seed(std::uint64_t seed, std::optional<double> bo
   return rig_test::render_calibration_sweep(spec);
 }
 
-SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel model) {
+// How a seed's corners are calibrated: once from the sweep's detections, or
+// in two passes, the second on the frames detected again through the first
+// pass's camera (rig calibrate with saved frames).
+enum class Passes { kOne, kTwo };
+
+SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel model,
+                           Passes passes = Passes::kOne) {
   CalibrationOptions options;
   options.distortion = model;
   const auto start = std::chrono::steady_clock::now();
-  const CalibrationResult r = rig::calibrate::calibrate(sweep.problem, options);
+  CalibrationResult r = rig::calibrate::calibrate(sweep.problem, options);
+  if (passes == Passes::kTwo)
+    r = rig::calibrate::calibrate(rig_test::redetected(sweep, r.camera), options);
   const auto done = std::chrono::steady_clock::now();
   const vision::Intrinsics& k = r.camera.intrinsics();
   const vision::Intrinsics& t = sweep.truth.camera.intrinsics();
@@ -83,6 +92,21 @@ SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel
                  {"yaw", sd("camera_misalignment_y_deg")},
                  {"roll", sd("camera_misalignment_z_deg")},
                  {"scale", sd("target_scale_error")}};
+  if (model == DistortionModel::kBrownConrady5) {
+    const rig_test::LensInModel lens = rig_test::lens_in_five_coefficients(sweep);
+    const Eigen::Vector3d in_model = rig_test::camera_rotation_error_deg(
+        r.geometry, rig_test::geometry_in_model(sweep.truth.geometry, lens));
+    e.error.insert({{"pitch_in_model", in_model.x()},
+                    {"yaw_in_model", in_model.y()},
+                    {"roll_in_model", in_model.z()},
+                    {"cx_in_model", k.cx - lens.camera.intrinsics().cx},
+                    {"cy_in_model", k.cy - lens.camera.intrinsics().cy}});
+    std::printf(
+        "  the lens in the model: turned %+.5f %+.5f %+.5f deg, cx %+.3f cy %+.3f px, "
+        "rms %.4f px\n",
+        lens.rotation_deg.x(), lens.rotation_deg.y(), lens.rotation_deg.z(),
+        lens.camera.intrinsics().cx - t.cx, lens.camera.intrinsics().cy - t.cy, lens.rms_px);
+  }
   if (model == DistortionModel::kThinPrism) {
     e.error.insert(
         {{"s1", d.s1 - s[0]}, {"s2", d.s2 - s[1]}, {"s3", d.s3 - s[2]}, {"s4", d.s4 - s[3]}});
@@ -114,22 +138,6 @@ SeedErrors calibrate_seed(std::uint64_t seed, std::optional<double> bow_sag_mm) 
   return calibrate_sweep(render_seed(seed, bow_sag_mm), CalibrationOptions{}.distortion);
 }
 
-// The brief's targets (fx, fy 0.02 %, principal point 0.2 px, camera
-// rotation 0.005 deg, distance at bench zero 20 um) where they are met, and
-// the measured bound where not:
-//  - pitch and yaw: the lens's thin-prism terms (lab: s1 = 1e-4, s3 = -5e-5,
-//    beyond the 5-parameter model the camera file holds) bend the image like
-//    a small rotation combined with a principal-point shift does, along the
-//    two nearly degenerate directions of a bench that never moves vertically
-//    (docs/calibration.md): every seed shows the same cx +0.146 px with yaw
-//    +0.0116 deg (0.0116 deg x fx 720 px = 0.146 px) and cy -0.09 px with
-//    pitch +0.007 deg. With the thin prism rendered as 0 (measured on seeds
-//    1-2), cx and yaw fall to 0.005 px and 0.0007 deg, pitch to 0.003 deg.
-//    Bounds: the worst measured (0.0086, 0.0123 deg) plus ~20 %.
-//  - the print scale: measured within 3.5e-6 of the truth (the bias of
-//    the detector's corners at 0.7 px of blur); bound 1e-5.
-// The sheet is rendered flat here: its bow (next test) is outside every
-// file's model, the calibration's and the truth's alike.
 // Errors and stated sds of one model over the seeds.
 struct OverSeeds {
   std::map<std::string, std::vector<double>> errors, stated;
@@ -176,50 +184,54 @@ struct OverSeeds {
   }
 };
 
-// Both lens models on the same renders of the ten truths. The targets (fx,
-// fy 0.02 %, principal point 0.2 px, camera rotation 0.005 deg per axis,
-// distance at bench zero 20 um) are asserted where met; elsewhere the
-// measured bound or the stated standard deviation:
-//  - the 5-coefficient model (the default): the lens's thin prism (lab:
-//    s1 = 1e-4, s3 = -5e-5) bends the image like a small rotation combined
-//    with a principal-point shift, along the two nearly degenerate
-//    directions of a bench that never moves vertically (docs/calibration.md):
-//    every seed shows nearly the same cx +0.14 px with yaw +0.011 deg (0.011
-//    deg x fx 720 px = 0.14 px) and cy -0.08 px with pitch +0.006 deg, a
-//    common bias 16 to 92 standard errors of the mean from 0 (asserted > 10).
-//    Bounds: the worst measured (pitch 0.0081, yaw 0.0124 deg) plus ~20 %.
-//  - the thin prism fitted: the yaw and cx bias goes (mean errors within 3
-//    standard errors of 0; measured 1.3 and 1.5), pitch and cy keep one of
-//    the same size and the other sign (-0.007 deg, +0.09 px; 3.0 and 3.2
-//    standard errors), and s1 and s3 take the perspective terms that told
-//    the rotation from the principal point: correlations yaw-s1 -0.995 to
-//    -0.998, pitch-s3 +0.95 to +0.97, so pitch, yaw and cy scatter by their
-//    stated sd (~0.011 deg, 0.14 px) and are checked against 4 stated sd
-//    per seed (a Gaussian exceeds it with probability 6e-5).
-//  - the print scale: within 3.6e-6 of the truth (the bias of the
-//    detector's corners at 0.7 px of blur); bound 1e-5.
-// The sheet is rendered flat here: its bow (next test) is outside every
+// Both lens models on the same renders of the ten truths, two passes each.
+// The targets: fx, fy 0.02 %, principal point 0.2 px, camera rotation 0.005
+// deg per axis, distance at bench zero 20 um, print scale 1e-5 (the bias of
+// the detector's corners at 0.7 px of blur: measured 3.5e-6), and stated
+// standard deviations within a factor 2 of the spread over the seeds. What
+// "the camera's rotation" is depends on the lens model:
+//  - the 5-coefficient model (the default) cannot hold the lab lens's thin
+//    prism (s1 = 1e-4, s3 = -5e-5), which to first order is a turn of the
+//    camera (rig_test::lens_in_five_coefficients): no model without a prism
+//    can see the mechanical rotation, and every seed measures yaw +0.011 and
+//    pitch +0.007 degree from it, with cx +0.15 and cy -0.08 px. The truth in
+//    that model's frame is the mechanical one turned by what the prism looks
+//    like (computed from the true lens alone, noise-free); the rotation and
+//    principal point are checked against it, and against the mechanical
+//    truth only the principal point (0.2 px).
+//  - the thin prism fitted: the frame is the mechanical one, but s1 and s3
+//    take the perspective terms that told the rotation from the principal
+//    point (correlations yaw-s1 -0.995 to -0.998, pitch-s3 +0.95 to +0.97),
+//    so pitch, yaw and cy scatter by their stated sd (~0.006 deg, 0.08 px)
+//    and are checked against 4 stated sd per seed (a Gaussian exceeds it with
+//    probability 6e-5).
+// The sheet is rendered flat here: its bow (a test below) is outside every
 // file's model, the calibration's and the truth's alike.
 TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
   OverSeeds five, prism;
   std::vector<SeedErrors> prism_seeds;
   for (std::uint64_t seed = 1; seed <= kSeeds; ++seed) {
     const rig_test::SimTruthSweep sweep = render_seed(seed, 0.0);
-    five.add(calibrate_sweep(sweep, DistortionModel::kBrownConrady5));
-    prism_seeds.push_back(calibrate_sweep(sweep, DistortionModel::kThinPrism));
+    five.add(calibrate_sweep(sweep, DistortionModel::kBrownConrady5, Passes::kTwo));
+    prism_seeds.push_back(calibrate_sweep(sweep, DistortionModel::kThinPrism, Passes::kTwo));
     prism.add(prism_seeds.back());
   }
   five.print("5");
   prism.print("thin_prism");
-  const std::map<std::string, double> five_bound = {
-      {"fx", 2e-4},      {"fy", 2e-4},    {"cx", 0.2},         {"cy", 0.2},    {"roll", 0.005},
-      {"pitch", 0.0105}, {"yaw", 0.0150}, {"distance", 20e-6}, {"scale", 1e-5}};
+  const std::map<std::string, double> five_bound = {{"fx", 2e-4},
+                                                    {"fy", 2e-4},
+                                                    {"cx", 0.2},
+                                                    {"cy", 0.2},
+                                                    {"cx_in_model", 0.2},
+                                                    {"cy_in_model", 0.2},
+                                                    {"roll", 0.005},
+                                                    {"roll_in_model", 0.005},
+                                                    {"pitch_in_model", 0.005},
+                                                    {"yaw_in_model", 0.005},
+                                                    {"distance", 20e-6},
+                                                    {"scale", 1e-5}};
   for (const auto& [name, b] : five_bound)
     EXPECT_LT(five.worst(name), b) << "5 coefficients: " << name;
-  for (const char* name : {"pitch", "yaw", "cx", "cy"})
-    EXPECT_GT(five.mean_in_standard_errors(name), 10) << "5 coefficients: " << name;
-  for (const char* name : {"yaw", "cx"})
-    EXPECT_LT(prism.mean_in_standard_errors(name), 3) << "thin prism: " << name;
   const std::map<std::string, double> prism_bound = {{"fx", 2e-4},        {"fy", 2e-4},
                                                      {"cx", 0.2},         {"roll", 0.005},
                                                      {"distance", 20e-6}, {"scale", 1e-5}};
@@ -228,35 +240,17 @@ TEST(CalibrateSimTruth, RecoversTheHiddenTruthOfTheLabProfileOverTenSeeds) {
   for (const SeedErrors& e : prism_seeds)
     for (const char* name : {"pitch", "yaw", "cy", "s1", "s2", "s3", "s4"})
       EXPECT_LT(std::abs(e.error.at(name)), 4 * e.stated_sd.at(name)) << "thin prism: " << name;
-
-  // Stated sd against the spread of the errors over the ten seeds (each seed
-  // draws its own truth and sensor noise): within the brief's factor 2 where
-  // measured so (5: fx, fy, cx, yaw, roll, 0.55-1.97; thin prism: fx, fy,
-  // cy, pitch, s2..s4, 0.66-1.77). Below it elsewhere (5: cy, pitch, scale
-  // 0.39-0.47; thin prism: cx, yaw, roll, s1, scale 0.39-0.47): the stated
-  // sd is larger than the spread, because the corner errors are not the
-  // independent noise the covariance assumes. The residual (sigma ~0.012
-  // px) is mostly deterministic, the detector's corner bias under 0.7 px of
-  // blur, the same shape in every seed, so it inflates the stated sd of the
-  // weakly determined directions while adding the same error to every seed
-  // rather than spread. Those are checked against their measured range with
-  // ~30 % margin.
-  const std::pair<double, double> factor_2{0.5, 2.0}, below{0.25, 0.65};
-  const std::map<std::string, std::pair<double, double>> five_ratio = {
-      {"fx", factor_2},   {"fy", factor_2}, {"cx", factor_2}, {"yaw", factor_2},
-      {"roll", factor_2}, {"cy", below},    {"pitch", below}, {"scale", below}};
-  const std::map<std::string, std::pair<double, double>> prism_ratio = {
-      {"fx", factor_2}, {"fy", factor_2}, {"cy", factor_2}, {"pitch", factor_2},
-      {"s2", factor_2}, {"s3", factor_2}, {"s4", factor_2}, {"cx", below},
-      {"yaw", below},   {"roll", below},  {"s1", below},    {"scale", below}};
-  for (const auto& [name, range] : five_ratio) {
-    EXPECT_GT(five.spread_over_stated(name), range.first) << "5 coefficients: " << name;
-    EXPECT_LT(five.spread_over_stated(name), range.second) << "5 coefficients: " << name;
-  }
-  for (const auto& [name, range] : prism_ratio) {
-    EXPECT_GT(prism.spread_over_stated(name), range.first) << "thin prism: " << name;
-    EXPECT_LT(prism.spread_over_stated(name), range.second) << "thin prism: " << name;
-  }
+  // Stated sd (clustered by bench position, CalibrationResult::sd_method)
+  // against the spread of the errors over the ten seeds, each seed its own
+  // truth and sensor noise: within the brief's factor 2 for every parameter
+  // of both models (measured 0.6-1.1).
+  for (const OverSeeds* model : {&five, &prism})
+    for (const auto& [name, values] : model->stated) {
+      EXPECT_GT(model->spread_over_stated(name), 0.5)
+          << (model == &five ? "5: " : "prism: ") << name;
+      EXPECT_LT(model->spread_over_stated(name), 2.0)
+          << (model == &five ? "5: " : "prism: ") << name;
+    }
 }
 
 // The lab lens's radial r^8 term (config/realism/lab.toml radial_k4 = 0.01,

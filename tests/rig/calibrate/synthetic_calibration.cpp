@@ -48,8 +48,6 @@ std::string calibration_target_path(const std::string& source_dir) {
   return source_dir + "/config/targets/calibration.toml";
 }
 
-namespace {
-
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::ostringstream s;
@@ -57,6 +55,21 @@ std::string read_file(const std::string& path) {
   if (!in) throw std::runtime_error(path + ": cannot be read");
   return s.str();
 }
+
+std::string camera_yaml(const vision::Camera& camera) {
+  const vision::Intrinsics& k = camera.intrinsics();
+  const vision::Distortion& d = camera.distortion();
+  std::ostringstream s;
+  s.precision(17);
+  s << "image_width: " << camera.width_px() << "\nimage_height: " << camera.height_px()
+    << "\ncamera_matrix: {rows: 3, cols: 3, data: [" << k.fx << ", 0, " << k.cx << ", 0, " << k.fy
+    << ", " << k.cy << ", 0, 0, 1]}\ndistortion_model: plumb_bob\n"
+    << "distortion_coefficients: {rows: 1, cols: 5, data: [" << d.k1 << ", " << d.k2 << ", " << d.p1
+    << ", " << d.p2 << ", " << d.k3 << "]}\n";
+  return s.str();
+}
+
+namespace {
 
 // The detections of every marker whose four corners fall inside the image.
 std::vector<db::store::DetectionRecord> detect(const SyntheticCalibrationSpec& spec,
@@ -86,19 +99,6 @@ std::vector<db::store::DetectionRecord> detect(const SyntheticCalibrationSpec& s
     if (inside) detections.push_back(d);
   }
   return detections;
-}
-
-std::string camera_yaml(const vision::Camera& camera) {
-  const vision::Intrinsics& k = camera.intrinsics();
-  const vision::Distortion& d = camera.distortion();
-  std::ostringstream s;
-  s.precision(17);
-  s << "image_width: " << camera.width_px() << "\nimage_height: " << camera.height_px()
-    << "\ncamera_matrix: {rows: 3, cols: 3, data: [" << k.fx << ", 0, " << k.cx << ", 0, " << k.fy
-    << ", " << k.cy << ", 0, 0, 1]}\ndistortion_model: plumb_bob\n"
-    << "distortion_coefficients: {rows: 1, cols: 5, data: [" << d.k1 << ", " << d.k2 << ", " << d.p1
-    << ", " << d.p2 << ", " << d.k3 << "]}\n";
-  return s.str();
 }
 
 }  // namespace

@@ -50,6 +50,11 @@ std::vector<std::pair<double, double>> read_csv_plan(const std::string& path);
 std::string calibration_plan_path(const std::string& source_dir);
 std::string calibration_target_path(const std::string& source_dir);
 
+// The bytes of a file (std::runtime_error naming it when it cannot be read).
+std::string read_file(const std::string& path);
+// The camera as a ROS camera_info file (plumb_bob), as a run stores it.
+std::string camera_yaml(const vision::Camera& camera);
+
 // Appends a run to the database at path; returns its id.
 std::int64_t write_calibration_run(const std::string& path, const SyntheticCalibrationSpec& spec);
 

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "vision/camera.hpp"
+#include "vision/detectors.hpp"
 #include "vision/rig_geometry.hpp"
 #include "vision/target.hpp"
 
@@ -78,6 +79,15 @@ struct CornerObservation {
   Eigen::Vector2d pixel = Eigen::Vector2d::Zero();           // distorted px
 };
 
+// A frame of the calibration sweep that the run saved ([capture]
+// save_frames): where the bench stood and the file, whose SHA-256 is checked
+// when it is read.
+struct CalibrationFrame {
+  std::int64_t plan_index = 0;
+  double x_mm = 0, y_mm = 0;  // bench read-back, mm
+  std::string image_path, image_sha256;
+};
+
 // What a calibration starts from: the nominal camera and geometry (starting
 // values; the geometry's camera offset is kept) and the observations.
 struct CalibrationProblem {
@@ -86,17 +96,46 @@ struct CalibrationProblem {
   vision::RigGeometry nominal_geometry;
   vision::Target target = vision::Target::paper_default();
   std::vector<CornerObservation> corners;
+  // Where the corners come from, for calibration.json.
+  std::string corners_from = "the run's detections";
+  // The detector that found them (a registry name, vision/detectors.hpp) and
+  // the frames it found them in, when the run saved them (else empty).
+  std::string detector = "rig";
+  std::vector<CalibrationFrame> frames;
 };
 
 // Reads run `run_id` (default: the latest run with detections) of the run
-// database at db_path: every detection of every frame of every ok position
-// with a read-back, and the stored calibration, layout and rig geometry
+// database at db_path: every detection of the run's primary detector in
+// every frame of every ok position with a read-back, those frames' saved
+// files (when the run saved them), and the stored calibration, layout and
+// rig geometry
 // (empty calibration or layout: the built-in defaults). Throws
 // CalibrationInputError naming the file and run when the file is missing or
 // not a run database, the run does not exist, or it has no detections of
 // layout markers; the stored files' own errors (vision::CalibrationError,
 // config::ConfigError) name the stored file.
 CalibrationProblem read_run(const std::string& db_path, std::optional<std::int64_t> run_id);
+
+// The corners of the layout's markers that `detector` finds in `image`, the
+// saved frame `frame`. Throws std::invalid_argument for an image type the
+// detector cannot convert.
+std::vector<CornerObservation> detect_corners(const vision::FiducialDetector& detector,
+                                              const vision::Target& target,
+                                              const CalibrationFrame& frame, const cv::Mat& image);
+
+// The problem with its corners detected again in its saved frames, by its
+// detector, through `camera` (a first calibration's). A detector that
+// follows the lens (rig's: its edges are straight lines through the
+// undistorted image) puts the corners where the lens model it is given says:
+// with the nominal lens the corners of every position carry that model's
+// error, and the calibration carries it on (on the simulated lab rig, fx's
+// spread over ten truths fell from 6.4e-6 to 1.7e-6 when detected again,
+// docs/calibration.md). Throws CalibrationInputError naming the run when it
+// saved no frames, and naming the file when a frame cannot be read, changed
+// since the run (SHA-256) or does not decode. The frames are read and
+// detected on `threads` threads (1-64); the corners come in frame order.
+CalibrationProblem redetected(const CalibrationProblem& problem, const vision::Camera& camera,
+                              int threads = 2);
 
 // The parameters, in this order (names as in calibration.json).
 constexpr int kParameterCount = 23;
@@ -132,7 +171,11 @@ constexpr double kMinRelativeSingularValue = 1e-9;
 struct ParameterEstimate {
   std::string name, unit;
   double value = 0;
-  double sd = 0;  // standard deviation; 0 for a fixed parameter
+  // Standard deviation (CalibrationResult::sd_method); 0 for a fixed parameter.
+  double sd = 0;
+  // What it would be if every corner coordinate erred independently by
+  // sigma_px: sigma_px^2 (J^T J)^-1.
+  double sd_independent = 0;
   bool fixed = false;
 };
 
@@ -147,8 +190,18 @@ struct CalibrationResult {
   // Correlations of the free parameters (kParameterCount x kParameterCount;
   // rows and columns of fixed parameters are 0, their diagonal 1).
   Eigen::MatrixXd correlation;
+  // How the covariance behind sd and correlation was estimated, from the
+  // Jacobian J and the residuals r at the solution: "clustered by bench
+  // position (N positions)", the sandwich (J^T J)^-1 M (J^T J)^-1 with M the
+  // sum over positions of their scores' outer products, which holds when the
+  // corner errors of a position are correlated (they are: the detector's bias
+  // under that position's blur and light, what the lens model leaves there);
+  // or, with fewer than 3 positions per free parameter, "independent corners"
+  // (sigma_px^2 (J^T J)^-1). docs/calibration.md compares both with the
+  // spread over simulated truths.
+  std::string sd_method;
   // Residual scale: sqrt(sum r^2 / (2 corners - free parameters)), px per
-  // coordinate; the covariance (J^T J)^-1 is scaled by its square.
+  // coordinate.
   double sigma_px = 0;
   double rms_px = 0;  // RMS corner error |r|, px
   std::map<std::int64_t, double> rms_by_position_px;
@@ -164,7 +217,7 @@ struct CalibrationResult {
 void check_observable(const CalibrationProblem& problem);
 
 // Runs check_observable, then the bundle adjustment from the nominal values,
-// then the rank check and (options.covariance) Ceres Covariance. Throws
+// then the rank check and (options.covariance) the covariance. Throws
 // UnobservablePlan, CalibrationInputError for an unknown fixed name, and
 // std::runtime_error when Ceres fails.
 CalibrationResult calibrate(const CalibrationProblem& problem, const CalibrationOptions& options);
