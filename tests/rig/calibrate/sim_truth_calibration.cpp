@@ -96,18 +96,7 @@ std::int64_t write_sim_truth_run(const SimTruthSweep& sweep, const std::string& 
   db::store::StoreOptions options;
   options.durable_commits = false;
   db::store::Store store(db_path, options);
-  db::store::RunDescription d;
-  d.config_json = "{}";
-  d.plan_json = "{}";
-  d.camera_calibration = {"camera.yaml", camera_yaml(sweep.problem.nominal_camera), ""};
-  const std::string layout = calibration_target_path(source_dir);
-  d.target_layout = {layout, read_file(layout), ""};
   const std::string rig = source_dir + "/config/rigs/sim.toml";
-  d.rig_geometry = {rig, read_file(rig), ""};
-  d.software_version = "test";
-  d.library_versions_json = "{}";
-  d.host = "test";
-  d.primary_detector = sweep.problem.detector;
   std::map<std::int64_t, db::store::PositionRecord> positions;
   for (std::size_t i = 0; i < sweep.images.size(); ++i) {
     const rig::calibrate::CalibrationFrame& where = sweep.problem.frames[i];
@@ -148,7 +137,10 @@ std::int64_t write_sim_truth_run(const SimTruthSweep& sweep, const std::string& 
     it->corners_px[2 * static_cast<std::size_t>(c.corner)] = c.pixel.x();
     it->corners_px[2 * static_cast<std::size_t>(c.corner) + 1] = c.pixel.y();
   }
-  d.plan_size = positions.empty() ? 0 : positions.rbegin()->first + 1;
+  db::store::RunDescription d = calibration_run_description(
+      sweep.problem.nominal_camera, calibration_target_path(source_dir), rig, read_file(rig),
+      positions.empty() ? 0 : positions.rbegin()->first + 1);
+  d.primary_detector = sweep.problem.detector;
   const std::int64_t run = store.start_run(d);
   for (const auto& [index, p] : positions)
     store.append_position(run, p);

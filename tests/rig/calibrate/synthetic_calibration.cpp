@@ -103,22 +103,31 @@ std::vector<db::store::DetectionRecord> detect(const SyntheticCalibrationSpec& s
 
 }  // namespace
 
+db::store::RunDescription calibration_run_description(const vision::Camera& nominal_camera,
+                                                      const std::string& layout_path,
+                                                      const std::string& rig_path,
+                                                      const std::string& rig_toml,
+                                                      std::int64_t plan_size) {
+  db::store::RunDescription d;
+  d.config_json = "{}";
+  d.plan_json = "{}";
+  d.plan_size = plan_size;
+  d.camera_calibration = {"camera.yaml", camera_yaml(nominal_camera), ""};
+  if (!layout_path.empty()) d.target_layout = {layout_path, read_file(layout_path), ""};
+  d.rig_geometry = {rig_path, rig_toml, ""};
+  d.software_version = "test";
+  d.library_versions_json = "{}";
+  d.host = "test";
+  return d;
+}
+
 std::int64_t write_calibration_run(const std::string& path, const SyntheticCalibrationSpec& spec) {
   db::store::StoreOptions options;
   options.durable_commits = false;
   db::store::Store store(path, options);
-  db::store::RunDescription d;
-  d.config_json = "{}";
-  d.plan_json = "{}";
-  d.plan_size = static_cast<std::int64_t>(spec.plan.size());
-  d.camera_calibration = {"camera.yaml", camera_yaml(spec.nominal_camera), ""};
-  if (!spec.target_layout_path.empty())
-    d.target_layout = {spec.target_layout_path, read_file(spec.target_layout_path), ""};
-  d.rig_geometry = {"rig.toml", spec.nominal_rig_toml, ""};
-  d.software_version = "test";
-  d.library_versions_json = "{}";
-  d.host = "test";
-  const std::int64_t run = store.start_run(d);
+  const std::int64_t run = store.start_run(calibration_run_description(
+      spec.nominal_camera, spec.target_layout_path, "rig.toml", spec.nominal_rig_toml,
+      static_cast<std::int64_t>(spec.plan.size())));
   const vision::Target target = spec.target_layout_path.empty()
                                     ? vision::Target::paper_default()
                                     : vision::Target::load(spec.target_layout_path);

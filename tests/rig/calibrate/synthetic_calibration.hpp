@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "db/store/records.hpp"
 #include "vision/camera.hpp"
 #include "vision/rig_geometry.hpp"
 #include "vision/target.hpp"
@@ -54,6 +55,15 @@ std::string calibration_target_path(const std::string& source_dir);
 std::string read_file(const std::string& path);
 // The camera as a ROS camera_info file (plumb_bob), as a run stores it.
 std::string camera_yaml(const vision::Camera& camera);
+
+// A calibration run's description: the nominal camera, the layout file
+// (empty: the built-in paper sheet) and the rig file stored, the rest
+// placeholders.
+db::store::RunDescription calibration_run_description(const vision::Camera& nominal_camera,
+                                                      const std::string& layout_path,
+                                                      const std::string& rig_path,
+                                                      const std::string& rig_toml,
+                                                      std::int64_t plan_size);
 
 // Appends a run to the database at path; returns its id.
 std::int64_t write_calibration_run(const std::string& path, const SyntheticCalibrationSpec& spec);
