@@ -21,8 +21,8 @@ inline void sums_of(const Lanes& a, const Lanes& b, const Lanes& c, const Lanes&
 }  // namespace
 
 EkfPoints::EkfPoints(const Correspondences& c)
-    : fx(c.camera->intrinsics().fx), fy(c.camera->intrinsics().fy) {
-  const size_t n = c.size();
+    : count(c.size()), fx(c.camera->intrinsics().fx), fy(c.camera->intrinsics().fy) {
+  const size_t n = count;
   blocks.resize((n + 3) / 4);
   for (size_t b = 0; b < blocks.size(); ++b) {
     Block& block = blocks[b];

@@ -47,6 +47,7 @@ struct EkfPoints {
     Lanes weight;   // 1 for a point, 0 for padding
   };
   std::vector<Block> blocks;
+  std::size_t count = 0;  // points (the padding not counted)
   double fx = 0, fy = 0;  // pixels
 
   explicit EkfPoints(const Correspondences& c);

@@ -33,6 +33,13 @@ std::vector<CornerObservation> detect_corners(const vision::FiducialDetector& de
   return out;
 }
 
+void check_saved_frames(const CalibrationProblem& problem) {
+  if (problem.frames.empty())
+    throw CalibrationInputError(problem.source +
+                                ": the run saved no frames ([capture] save_frames), so its "
+                                "corners cannot be detected again");
+}
+
 namespace {
 
 // One saved frame detected again: read (its SHA-256 checked), decoded, detected.
@@ -56,10 +63,7 @@ std::vector<CornerObservation> redetect_frame(const CalibrationProblem& problem,
 
 CalibrationProblem redetected(const CalibrationProblem& problem, const vision::Camera& camera,
                               int threads) {
-  if (problem.frames.empty())
-    throw CalibrationInputError(problem.source +
-                                ": the run saved no frames ([capture] save_frames), so its "
-                                "corners cannot be detected again");
+  check_saved_frames(problem);
   const std::unique_ptr<vision::FiducialDetector> detector =
       vision::make_detector(problem.detector, camera, problem.target.family);
   // Contiguous shares of the frames, one per thread, joined in frame order.

@@ -50,14 +50,19 @@ int run_calibrate(const CalibrateArgs& a) {
                                            : calibrate::DistortionModel::kThinPrism;
   options.huber_px = a.huber_px;
   options.threads = a.threads;
-  calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
-  if (a.redetect == "yes" || (a.redetect == "auto" && !problem.frames.empty())) {
-    std::cout << problem.source << ": first pass on the run's detections, " << result.corners
-              << " corners, RMS " << std::setprecision(3) << result.rms_px << " px; detecting the "
+  if (a.redetect == "yes") calibrate::check_saved_frames(problem);
+  const bool two_passes = a.redetect == "yes" || (a.redetect == "auto" && !problem.frames.empty());
+  if (two_passes) {
+    // The first pass only gives the camera to detect through: no covariance.
+    calibrate::CalibrationOptions first_options = options;
+    first_options.covariance = false;
+    const calibrate::CalibrationResult first = calibrate::calibrate(problem, first_options);
+    std::cout << problem.source << ": first pass on the run's detections, " << first.corners
+              << " corners, RMS " << std::setprecision(3) << first.rms_px << " px; detecting the "
               << problem.frames.size() << " saved frames again through its camera\n";
-    problem = calibrate::redetected(problem, result.camera, a.threads);
-    result = calibrate::calibrate(problem, options);
+    problem = calibrate::redetected(problem, first.camera, a.threads);
   }
+  const calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
   const calibrate::HeldOutCheck held_out = calibrate::held_out_check(problem, options);
   const calibrate::CalibrationFiles files =
       calibrate::write_calibration(a.out_dir, problem, result, held_out);

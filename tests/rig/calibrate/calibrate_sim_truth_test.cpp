@@ -60,9 +60,17 @@ SeedErrors calibrate_sweep(const rig_test::SimTruthSweep& sweep, DistortionModel
   CalibrationOptions options;
   options.distortion = model;
   const auto start = std::chrono::steady_clock::now();
-  CalibrationResult r = rig::calibrate::calibrate(sweep.problem, options);
-  if (passes == Passes::kTwo)
-    r = rig::calibrate::calibrate(rig_test::redetected(sweep, r.camera), options);
+  CalibrationResult r;
+  if (passes == Passes::kTwo) {
+    // The first pass only gives the camera to detect through: no covariance.
+    CalibrationOptions first = options;
+    first.covariance = false;
+    r = rig::calibrate::calibrate(
+        rig_test::redetected(sweep, rig::calibrate::calibrate(sweep.problem, first).camera),
+        options);
+  } else {
+    r = rig::calibrate::calibrate(sweep.problem, options);
+  }
   const auto done = std::chrono::steady_clock::now();
   const vision::Intrinsics& k = r.camera.intrinsics();
   const vision::Intrinsics& t = sweep.truth.camera.intrinsics();

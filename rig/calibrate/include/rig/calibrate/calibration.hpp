@@ -123,6 +123,10 @@ std::vector<CornerObservation> detect_corners(const vision::FiducialDetector& de
                                               const vision::Target& target,
                                               const CalibrationFrame& frame, const cv::Mat& image);
 
+// Throws CalibrationInputError naming the run when it saved no frames
+// (problem.frames empty): its corners cannot be detected again.
+void check_saved_frames(const CalibrationProblem& problem);
+
 // The problem with its corners detected again in its saved frames, by its
 // detector, through `camera` (a first calibration's). A detector that
 // follows the lens (rig's: its edges are straight lines through the
