@@ -2,11 +2,35 @@
 
 #include <algorithm>
 #include <chrono>
+#include <mutex>
+#include <opencv2/core/utility.hpp>
 #include <stdexcept>
 #include <string>
 #include <utility>
 
 namespace rig::sweep {
+namespace {
+
+// How many pools of more than one thread live, and OpenCV's thread count
+// before the first of them turned its parallel loops off.
+std::mutex opencv_threads_mutex;
+int opencv_serial_holders = 0;
+int opencv_threads_before = 0;
+
+void hold_opencv_serial() {
+  const std::lock_guard<std::mutex> lock(opencv_threads_mutex);
+  if (opencv_serial_holders++ == 0) {
+    opencv_threads_before = cv::getNumThreads();
+    cv::setNumThreads(1);
+  }
+}
+
+void release_opencv_serial() {
+  const std::lock_guard<std::mutex> lock(opencv_threads_mutex);
+  if (--opencv_serial_holders == 0) cv::setNumThreads(opencv_threads_before);
+}
+
+}  // namespace
 
 int default_compute_threads() {
   const unsigned hardware = std::thread::hardware_concurrency();  // 0 when unknown
@@ -18,6 +42,7 @@ FramePool::FramePool(const vision::FrameMeasurer& measurer, int threads)
   if (threads < 1 || threads > kMaxThreads)
     throw std::invalid_argument("FramePool: threads = " + std::to_string(threads) +
                                 "; expected 1.." + std::to_string(kMaxThreads));
+  if (threads > 1) hold_opencv_serial();
   for (int k = 1; k < threads; ++k)
     workers_.emplace_back([this] { work(); });
 }
@@ -31,6 +56,7 @@ FramePool::~FramePool() {
   queued_.notify_all();
   for (std::thread& w : workers_)
     w.join();
+  if (threads_ > 1) release_opencv_serial();
 }
 
 FramePool::Ticket FramePool::submit(cv::Mat image) {

@@ -9,6 +9,7 @@
 #include "rig/sweep/frame_pool.hpp"
 
 #include <gtest/gtest.h>
+#include <opencv2/core/utility.hpp>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -86,8 +87,13 @@ TEST(FramePool, TwoThreadsMeasureEveryFrameExactlyAsTheCallersThreadDoes) {
   const vision::FrameMeasurer measurer(config.camera, config.target, {},
                                        {"rig", "aruco:subpix", "apriltag:d2"});
   std::vector<cv::Mat> frames;
-  for (int k = 0; k < 6; ++k)
+  // Measured serially before the pool exists, with OpenCV's own parallel
+  // loops as the process has them; the pool turns them off.
+  std::vector<vision::FrameMeasurement> serials;
+  for (int k = 0; k < 6; ++k) {
     frames.push_back(render_at(renderer, config, 100.0 * k, 150.0, 40 + k));
+    serials.push_back(measurer.measure(frames.back()));
+  }
   rig::sweep::FramePool pool(measurer, 2);
   std::vector<rig::sweep::FramePool::Ticket> tickets;
   for (const cv::Mat& f : frames)
@@ -95,12 +101,36 @@ TEST(FramePool, TwoThreadsMeasureEveryFrameExactlyAsTheCallersThreadDoes) {
   // Taken last first: each ticket holds its own frame's measurement.
   for (std::size_t k = frames.size(); k-- > 0;) {
     const vision::FrameMeasurement parallel = pool.take(tickets[k]);
-    const vision::FrameMeasurement serial = measurer.measure(frames[k]);
+    const vision::FrameMeasurement& serial = serials[k];
     ASSERT_EQ(serial.detectors.size(), 3u);
     for (const auto& d : serial.detectors)  // config/rigs/sim.toml: the whole sheet in view
       EXPECT_EQ(d.detections.size(), 4u) << d.detector;
     expect_same(serial, parallel, "frame " + std::to_string(k));
   }
+}
+
+// The frames are the unit of parallelism: while a pool of more than one
+// thread lives OpenCV runs its loops on the calling thread, and the setting
+// the process had comes back after the last such pool.
+TEST(FramePool, OpenCvRunsSeriallyWhileAPoolOfThreadsLivesAndAsBeforeAfter) {
+  const rig::sweep::SweepConfig config = rig::sweep::load_sweep_config(kSmoke);
+  const vision::FrameMeasurer measurer(config.camera, config.target);
+  const int before = cv::getNumThreads();
+  cv::setNumThreads(3);  // not 1, so that turning the loops off shows
+  {
+    const rig::sweep::FramePool serial(measurer, 1);
+    EXPECT_EQ(cv::getNumThreads(), 3) << "the serial path leaves OpenCV as it is";
+    auto first = std::make_unique<rig::sweep::FramePool>(measurer, 2);
+    EXPECT_EQ(cv::getNumThreads(), 1);
+    {
+      const rig::sweep::FramePool second(measurer, 2);
+      EXPECT_EQ(cv::getNumThreads(), 1);
+      first.reset();
+      EXPECT_EQ(cv::getNumThreads(), 1) << "a pool of threads still lives";
+    }
+    EXPECT_EQ(cv::getNumThreads(), 3);
+  }
+  cv::setNumThreads(before);
 }
 
 TEST(FramePool, WhatMeasureThrowsReachesTheTakerAndTheOtherFramesAreMeasured) {

@@ -22,6 +22,14 @@
 // waiting. Its take() then returns when that frame is done: at most one
 // frame's measurement later than its own was ready. Frames are started in
 // submission order.
+//
+// While a pool of N > 1 threads lives, OpenCV's own parallel loops are off
+// (cv::setNumThreads(1), process-wide; the previous setting comes back when
+// the last such pool is destroyed): the frames are the unit of parallelism,
+// and OpenCV's worker threads would compete with the pool's for the same
+// cores (bench_sweep, two threads and ahead: about 10 % more positions per
+// second). The measurements are the same either way: OpenCV's parallel
+// loops split an image into stripes that give the same pixels.
 #pragma once
 
 #include <condition_variable>
