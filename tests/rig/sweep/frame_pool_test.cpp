@@ -9,7 +9,6 @@
 #include "rig/sweep/frame_pool.hpp"
 
 #include <gtest/gtest.h>
-#include <opencv2/core/utility.hpp>
 #include <sqlite3.h>
 #include <unistd.h>
 
@@ -19,6 +18,7 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <opencv2/core/utility.hpp>
 #include <stdexcept>
 #include <string>
 #include <tuple>
