@@ -61,6 +61,11 @@ int run_calibrate(const CalibrateArgs& a) {
               << " corners, RMS " << std::setprecision(3) << first.rms_px << " px; detecting the "
               << problem.frames.size() << " saved frames again through its camera\n";
     problem = calibrate::redetected(problem, first.camera, a.threads);
+  } else if (a.redetect == "auto") {
+    std::cout << problem.source
+              << ": one pass, on the run's detections: the run saved no frames to detect again "
+                 "through the calibrated camera ([capture] save_frames in the sweep file gives "
+                 "the second pass, docs/calibration.md)\n";
   }
   const calibrate::CalibrationResult result = calibrate::calibrate(problem, options);
   const calibrate::HeldOutCheck held_out = calibrate::held_out_check(problem, options);

@@ -109,6 +109,9 @@ TEST(CalibrateRedetect, RedetectYesOnARunWithoutFramesIsRefused) {
   const rig_test::RigRun a =
       rig_test::run_rig("calibrate " + dir.file("run.db") + " --out " + dir.file("auto"));
   ASSERT_EQ(a.exit_code, 0) << a.err;
+  EXPECT_NE(a.out.find(": one pass, on the run's detections: the run saved no frames"),
+            std::string::npos)
+      << a.out;
   const nlohmann::json j = calibration_json(dir.file("auto"));
   EXPECT_EQ(j["corners_from"], "the run's detections");
   EXPECT_EQ(j["sd_method"], "clustered by bench position (221 positions)");
