@@ -325,8 +325,8 @@ TEST_F(RtuOverPty, LinksToTwoUnitsOnOneDeviceShareOnePort) {
 }
 
 TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
-  // A real libmodbus RTU server at unit 1 stamps when its answer has gone and
-  // when each request has arrived, also one for unit 2, which nobody on the
+  // A real libmodbus RTU server at unit 1 stamps when its answer starts to go
+  // and when each request has arrived, also one for unit 2, which nobody on the
   // line answers. As below, a request to unit 2 that left the driver the
   // silent interval after it received unit 1's answer arrives at least that
   // long after the answer went, with no tolerance needed. With a port per
@@ -360,8 +360,11 @@ TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
       std::lock_guard<std::mutex> lock(mutex);
       frames.push_back({query[0], in});
       if (n > 0) {
+        // Stamped before the answer is written, so never later than the
+        // driver can have it, however long this thread waits for a core.
+        const auto answering = Clock::now();
         modbus_reply(c, query, n, map);
-        frames.push_back({0, Clock::now()});
+        frames.push_back({0, answering});
       }
     });
     std::uint16_t value = 0;
@@ -386,10 +389,11 @@ TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
 
 TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // A real libmodbus RTU server (unit 1, every register kept) stamps when a
-  // request has arrived and when its answer has gone. A request leaves the
+  // request has arrived and when its answer starts to go. A request leaves the
   // driver at least the silent interval after the driver received the last
-  // answer, which is after the server sent it: every gap the server sees is at
-  // least the interval, with no tolerance needed. Without the wait, requests
+  // answer, which is after the server began to send it: every gap the server
+  // sees is at least the interval, with no tolerance needed, however the
+  // threads are scheduled (each stamp errs on the side of a longer gap). Without the wait, requests
   // arrived 0.08 to 0.34 ms after the last answer (measured), a tenth of it.
   // A pty ignores the baud rate, so only the driver's pacing is tested here.
   modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 9600, 'E', 8, 1);
@@ -406,9 +410,13 @@ TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
       const int n = modbus_receive(c, query);
       if (n <= 0) return;
       const auto in = Clock::now();
+      // Stamped before the answer is written (see above): a stamp after it
+      // came up to 1.7 ms late on a loaded machine, which read as a request
+      // sent too early.
+      const auto answering = Clock::now();
       modbus_reply(c, query, n, map);
       std::lock_guard<std::mutex> lock(mutex);
-      frames.push_back({in, Clock::now()});
+      frames.push_back({in, answering});
     });
     motion::ModbusBench bench(
         motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1"),
