@@ -393,8 +393,9 @@ TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // driver at least the silent interval after the driver received the last
   // answer, which is after the server began to send it: every gap the server
   // sees is at least the interval, with no tolerance needed, however the
-  // threads are scheduled (each stamp errs on the side of a longer gap). Without the wait, requests
-  // arrived 0.08 to 0.34 ms after the last answer (measured), a tenth of it.
+  // threads are scheduled (each stamp errs on the side of a longer gap).
+  // Without the wait, requests arrived 0.08 to 0.34 ms after the last answer
+  // (measured), a tenth of it.
   // A pty ignores the baud rate, so only the driver's pacing is tested here.
   modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 9600, 'E', 8, 1);
   ASSERT_NE(ctx, nullptr);
