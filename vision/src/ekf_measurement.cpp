@@ -1,5 +1,7 @@
 #include "ekf_measurement.hpp"
 
+#include <cstring>
+
 namespace vision::detail {
 namespace {
 
@@ -40,20 +42,26 @@ EkfPoints::EkfPoints(const Correspondences& c)
 
 namespace {
 
-// The 28 sums that make H^T H (lower triangle), H^T r and |r|^2, ordered in
-// the groups of four that sums_of reduces together.
+// The 28 sums that make H^T H (lower triangle, row by row, as lower_index
+// keeps it), H^T r and |r|^2: the layout of MeasurementSums, so that the sums
+// over the lanes, four at a time, are stored as they come. H^T H's (ty, tx)
+// entry is zero (a point's x row has no ty term, its y row no tx term).
 // clang-format off
 enum Term {
-  kRR00, kRR11, kRR22, kResidual,  // rotation block, diagonal; |r|^2
-  kRR10, kRR20, kRR21, kTT22,      // rotation block, off the diagonal; tz tz
-  kTX0, kTX1, kTX2, kTY0,          // translation rows x rotation columns
-  kTY1, kTY2, kTZ0, kTZ1,
-  kTZ2, kTT00, kTT11, kTT20,       // ...; translation block
-  kG0, kG1, kG2, kTT21,            // gradient, rotation; ty tz
-  kG3, kG4, kG5, kUnused,          // gradient, translation
+  kRR00,                          // rotation block (psi, theta, phi)
+  kRR10, kRR11,
+  kRR20, kRR21, kRR22,
+  kTX0, kTX1, kTX2, kTT00,        // translation rows x rotation columns; translation block
+  kTY0, kTY1, kTY2, kTT10, kTT11,
+  kTZ0, kTZ1, kTZ2, kTT20, kTT21, kTT22,
+  kG0, kG1, kG2, kG3, kG4, kG5,   // gradient H^T r
+  kResidual,                      // |r|^2
   kTerms
 };
 // clang-format on
+static_assert(kTerms % 4 == 0 && kTerms * sizeof(double) == sizeof(MeasurementSums),
+              "the terms are MeasurementSums, in four-lane groups");
+static_assert(kTT22 == lower_index(5, 5) && kG0 == 21, "H^T H first, by lower_index");
 
 // The projection at a state: its rotation R = Rz(psi) Ry(theta) Rx(phi) by
 // the products of Ry Rx (m) and R (r) that the measurement uses, its
@@ -138,14 +146,14 @@ inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t
   t[kG3] = e0 * ax;
   t[kG4] = e1 * by;
   t[kG5] = -(e0 * axu + e1 * byv);
-  t[kUnused] = Lanes{};
+  t[kTT10] = Lanes{};
   return true;
 }
 
 // The measurement (vision/src/ekf_measurement.hpp), built for whichever
 // instruction set its caller is.
 inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                    Eigen::Matrix<double, 6, 6>* HtH, Vector6d* Htr, double* residual_squared) {
+                    MeasurementSums* out) {
   const Projection r(points, x, trig);
   Lanes t[kTerms];
   if (!block_terms(points.blocks[0], r, t)) return false;
@@ -155,49 +163,23 @@ inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig&
     for (int k = 0; k < kTerms; ++k)
       t[k] += more[k];
   }
-  // The sums over the lanes, four at a time.
+  // The sums over the lanes, four at a time, in MeasurementSums' order.
   Lanes sums[kTerms / 4];
   for (int k = 0; k < kTerms / 4; ++k)
     sums_of(t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3], &sums[k]);
-  const auto sum = [&](Term k) { return sums[k / 4][k % 4]; };
-  Eigen::Matrix<double, 6, 6>& A = *HtH;
-  A(0, 0) = sum(kRR00);
-  A(1, 0) = sum(kRR10);
-  A(1, 1) = sum(kRR11);
-  A(2, 0) = sum(kRR20);
-  A(2, 1) = sum(kRR21);
-  A(2, 2) = sum(kRR22);
-  A(3, 0) = sum(kTX0);
-  A(3, 1) = sum(kTX1);
-  A(3, 2) = sum(kTX2);
-  A(4, 0) = sum(kTY0);
-  A(4, 1) = sum(kTY1);
-  A(4, 2) = sum(kTY2);
-  A(5, 0) = sum(kTZ0);
-  A(5, 1) = sum(kTZ1);
-  A(5, 2) = sum(kTZ2);
-  A(3, 3) = sum(kTT00);
-  A(4, 3) = 0;
-  A(4, 4) = sum(kTT11);
-  A(5, 3) = sum(kTT20);
-  A(5, 4) = sum(kTT21);
-  A(5, 5) = sum(kTT22);
-  A.triangularView<Eigen::StrictlyUpper>() = A.transpose();
-  *Htr << sum(kG0), sum(kG1), sum(kG2), sum(kG3), sum(kG4), sum(kG5);
-  *residual_squared = sum(kResidual);
+  std::memcpy(out, sums, sizeof(MeasurementSums));
   return true;
 }
 
 bool measure_baseline(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                      Eigen::Matrix<double, 6, 6>* HtH, Vector6d* Htr, double* residual_squared) {
-  return measure(points, x, trig, HtH, Htr, residual_squared);
+                      MeasurementSums* out) {
+  return measure(points, x, trig, out);
 }
 
 #if defined(VISION_EKF_AVX2_FMA)
 VISION_EKF_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x,
-                                          const EulerTrig& trig, Eigen::Matrix<double, 6, 6>* HtH,
-                                          Vector6d* Htr, double* residual_squared) {
-  return measure(points, x, trig, HtH, Htr, residual_squared);
+                                          const EulerTrig& trig, MeasurementSums* out) {
+  return measure(points, x, trig, out);
 }
 #endif
 

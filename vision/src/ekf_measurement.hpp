@@ -8,12 +8,11 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "symmetric6.hpp"
 #include "vision/correspondences.hpp"
 #include "vision/pose_ekf.hpp"
 
 namespace vision::detail {
-
-using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 // The sines and cosines of a state's three Euler angles (psi, theta, phi).
 struct EulerTrig {
@@ -53,14 +52,21 @@ struct EkfPoints {
   explicit EkfPoints(const Correspondences& c);
 };
 
-// The measurement at state x (whose Euler sines and cosines are `trig`):
-// H^T H (pixels^2 per state unit^2), H^T r and |r|^2 (pixels^2), where
-// r = z - h(x) is the observed minus the predicted undistorted pixel of every
-// point. False, and nothing written, when a point is on or behind the camera
+// The sums the update takes from the measurement at one state, in the order
+// the measurement accumulates them: H^T H (pixels^2 per state unit^2) by its
+// lower triangle, H^T r, and |r|^2 (pixels^2), where r = z - h(x) is the
+// observed minus the predicted undistorted pixel of every point.
+struct MeasurementSums {
+  Symmetric6 HtH;
+  double Htr[6];
+  double residual_squared;
+};
+
+// The measurement at state x (whose Euler sines and cosines are `trig`).
+// False, and nothing written, when a point is on or behind the camera
 // (z <= 0). One function per instruction set.
 using EkfMeasurement = bool (*)(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                                Eigen::Matrix<double, 6, 6>* HtH, Vector6d* Htr,
-                                double* residual_squared);
+                                MeasurementSums* sums);
 EkfMeasurement ekf_measurement(EkfInstructionSet set);
 
 // The set to run: `requested` where the CPU runs it, else the fastest it runs.

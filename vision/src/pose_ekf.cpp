@@ -1,6 +1,5 @@
 #include "vision/pose_ekf.hpp"
 
-#include <Eigen/Cholesky>
 #include <cmath>
 #include <utility>
 
@@ -12,6 +11,10 @@ namespace {
 
 using detail::EkfPoints;
 using detail::EulerTrig;
+using detail::inverse_spd;
+using detail::lower_triangle;
+using detail::MeasurementSums;
+using detail::Symmetric6;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 Pose pose_from_state(const Vector6d& x) {
@@ -26,16 +29,25 @@ Vector6d state_from_pose(const Pose& T) {
 
 // The difference of two states with the angles wrapped to (-pi, pi], so that a
 // prior at psi = pi and a state at -pi are not 2 pi apart: std::remainder(d,
-// 2 pi), with its two common cases written out. For |d| <= pi it is d; for
+// 2 pi), with its common cases written out. For |d| <= pi it is d; for
 // pi < |d| < 3 pi it is d -+ 2 pi, which is exact in floating point (Sterbenz:
-// d and 2 pi are within a factor of 2), so all three give the same bits.
+// d and 2 pi are within a factor of 2). Further out, d - k 2 pi with k the
+// nearest integer to d / 2 pi is exactly representable (as every remainder
+// is), so one fused multiply-add gives it exactly; when rounding of the
+// quotient picked the wrong k, the result lands on or outside pi and
+// std::remainder decides. All give the bits std::remainder gives.
 Vector6d state_difference(const Vector6d& a, const Vector6d& b) {
   constexpr double two_pi = 2.0 * M_PI;
   Vector6d d = a - b;
   for (int k = 0; k < 3; ++k) {
     const double m = std::abs(d(k));
     if (m <= M_PI) continue;
-    d(k) = m < 3 * M_PI ? d(k) - std::copysign(two_pi, d(k)) : std::remainder(d(k), two_pi);
+    if (m < 3 * M_PI) {
+      d(k) -= std::copysign(two_pi, d(k));
+      continue;
+    }
+    const double wrapped = std::fma(-std::nearbyint(d(k) / two_pi), two_pi, d(k));
+    d(k) = std::abs(wrapped) < M_PI ? wrapped : std::remainder(d(k), two_pi);
   }
   return d;
 }
@@ -52,101 +64,39 @@ EulerTrig euler_trig(const Vector6d& x) {
 // The sines and cosines at x + step from those at x: the angle-addition
 // formulas with sin(s) and cos(s) - 1 of a small step as their Taylor series,
 // sin(x + s) = sin x + (sin x (cos s - 1) + cos x sin s), likewise cos. For
-// |s| <= 1/16 the first omitted terms are below s^11 / 11! = 1.5e-21 and
-// s^12 / 12! = 6e-24, so each update is exact to a few units in the last
+// |s| <= 1/4 the first omitted terms are below s^15 / 15! = 7e-22 and
+// s^16 / 16! = 1.1e-23, so each update is exact to a few units in the last
 // place; along the at most max_iterations steps of one solve that stays below
 // ~1e-13, far inside the 1e-9 to which the iterates are defined
 // (tests/vision/pose_ekf_reference_test.cpp). A larger step takes the sine
-// and cosine of the new angle itself. A dozen multiply-adds per angle,
+// and cosine of the new angle itself. About twenty multiply-adds per angle,
 // against about 130 instructions for glibc's sincos (callgrind).
 inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
   EulerTrig t;
   for (int k = 0; k < 3; ++k) {
     const double s = step(k);
-    if (!(std::abs(s) <= 0.0625)) {
+    if (!(std::abs(s) <= 0.25)) {
       t.s[k] = std::sin(next(k));
       t.c[k] = std::cos(next(k));
       continue;
     }
     const double s2 = s * s;
     const double sin_s =
-        s * (1 + s2 * (-1.0 / 6 + s2 * (1.0 / 120 + s2 * (-1.0 / 5040 + s2 * (1.0 / 362880)))));
+        s *
+        (1 + s2 * (-1.0 / 6 +
+                   s2 * (1.0 / 120 + s2 * (-1.0 / 5040 +
+                                           s2 * (1.0 / 362880 + s2 * (-1.0 / 39916800 +
+                                                                      s2 * (1.0 / 6227020800)))))));
     const double cos_s_minus_1 =
-        s2 *
-        (-0.5 + s2 * (1.0 / 24 + s2 * (-1.0 / 720 + s2 * (1.0 / 40320 + s2 * (-1.0 / 3628800)))));
+        s2 * (-0.5 + s2 * (1.0 / 24 +
+                           s2 * (-1.0 / 720 +
+                                 s2 * (1.0 / 40320 + s2 * (-1.0 / 3628800 +
+                                                           s2 * (1.0 / 479001600 +
+                                                                 s2 * (-1.0 / 87178291200.0)))))));
     t.s[k] = at.s[k] + (at.s[k] * cos_s_minus_1 + at.c[k] * sin_s);
     t.c[k] = at.c[k] + (at.c[k] * cos_s_minus_1 - at.s[k] * sin_s);
   }
   return t;
-}
-
-// The inverse of a symmetric 3x3 matrix in closed form (adjugate over
-// determinant); false when it is not invertible.
-bool inverse3_symmetric(const Eigen::Matrix3d& m, Eigen::Matrix3d* inv) {
-  const double c00 = m(1, 1) * m(2, 2) - m(1, 2) * m(1, 2);
-  const double c01 = m(0, 2) * m(1, 2) - m(0, 1) * m(2, 2);
-  const double c02 = m(0, 1) * m(1, 2) - m(0, 2) * m(1, 1);
-  const double det = m(0, 0) * c00 + m(0, 1) * c01 + m(0, 2) * c02;
-  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
-  const double s = 1.0 / det;
-  const double c11 = m(0, 0) * m(2, 2) - m(0, 2) * m(0, 2);
-  const double c12 = m(0, 1) * m(0, 2) - m(0, 0) * m(1, 2);
-  const double c22 = m(0, 0) * m(1, 1) - m(0, 1) * m(0, 1);
-  *inv << c00 * s, c01 * s, c02 * s, c01 * s, c11 * s, c12 * s, c02 * s, c12 * s, c22 * s;
-  return true;
-}
-
-// A symmetric positive-definite 6x6 system in 3x3 blocks (angles,
-// translation), its diagonal multiplied by `diagonal_scale` (the
-// Levenberg-Marquardt damping, 1 + lambda): A = [A11 A12; A12^T A22],
-// eliminated through the Schur complement S = A22 - A12^T A11^-1 A12 with
-// both 3x3 inverses in closed form. No pivoting (the blocks of a
-// positive-definite matrix and its Schur complement are positive definite),
-// two divisions, short dependency chains. `ok` is false when a block is
-// singular to rounding.
-struct Spd6 {
-  Eigen::Matrix3d inv11, inv_schur, W;  // W = A11^-1 A12
-  Eigen::Matrix3d A21;
-  bool ok = false;
-
-  explicit Spd6(const Matrix6d& A, double diagonal_scale = 1.0) {
-    Eigen::Matrix3d A11 = A.topLeftCorner<3, 3>(), A22 = A.bottomRightCorner<3, 3>();
-    A11.diagonal() *= diagonal_scale;
-    A22.diagonal() *= diagonal_scale;
-    A21 = A.bottomLeftCorner<3, 3>();
-    if (!inverse3_symmetric(A11, &inv11)) return;
-    W = inv11 * A21.transpose();
-    const Eigen::Matrix3d schur = A22 - A21 * W;
-    ok = inverse3_symmetric(schur, &inv_schur);
-  }
-  // A^-1 b (of the scaled A).
-  Vector6d solve(const Vector6d& b) const {
-    const Eigen::Vector3d y1 = inv11 * b.head<3>();
-    const Eigen::Vector3d x2 = inv_schur * (b.tail<3>() - A21 * y1);
-    Vector6d x;
-    x << y1 - W * x2, x2;
-    return x;
-  }
-};
-
-// A^-1 b for the symmetric positive-definite A, its diagonal multiplied by
-// `diagonal_scale` (Eigen's pivoting LDLT when a pivot fails).
-inline Vector6d solve_spd(const Matrix6d& A, const Vector6d& b, double diagonal_scale = 1.0) {
-  const Spd6 factors(A, diagonal_scale);
-  if (factors.ok) return factors.solve(b);
-  Matrix6d scaled = A;
-  scaled.diagonal() *= diagonal_scale;
-  return scaled.ldlt().solve(b);
-}
-
-// A^-1 of the symmetric positive-definite A, column by column.
-Matrix6d inverse_spd(const Matrix6d& A) {
-  const Spd6 factors(A);
-  if (!factors.ok) return A.ldlt().solve(Matrix6d::Identity());
-  Matrix6d inverse;
-  for (int j = 0; j < 6; ++j)
-    inverse.col(j) = factors.solve(Vector6d::Unit(j));
-  return inverse;
 }
 
 Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
@@ -160,8 +110,7 @@ Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
 // pull P^-1 (x - x_prior) (its gradient), and the state's sines and cosines
 // (the next trial state's start from them).
 struct Linearisation {
-  Matrix6d HtH;
-  Vector6d Htr;
+  MeasurementSums sums;
   Vector6d prior_pull;
   double cost = 0;
   EulerTrig trig;
@@ -173,28 +122,49 @@ struct MapCost {
   EkfPoints points;
   detail::EkfMeasurement measurement;
   Vector6d x_prior;
-  Matrix6d prior_information;  // P^-1
-  double inv_r;                // R^-1 = 1 / sigma^2, px^-2
+  Matrix6d prior_information;          // P^-1
+  Symmetric6 prior_information_lower;  // the same, by its lower triangle
+  double inv_r;                        // R^-1 = 1 / sigma^2, px^-2
+  // P^-1 has exact zeros off its diagonal (the nominal prior, the analytic
+  // start): its product with a state difference is then the diagonal's, which
+  // gives the same bits without the 30 products by zero.
+  bool prior_is_diagonal;
 
   // The system at `state`, whose sines and cosines `at->trig` already holds.
   // False when a point is on or behind the camera.
   bool evaluate(const Vector6d& state, Linearisation* at) const {
-    double residual_squared = 0;
-    if (!measurement(points, state, at->trig, &at->HtH, &at->Htr, &residual_squared)) return false;
+    if (!measurement(points, state, at->trig, &at->sums)) return false;
     const Vector6d d = state_difference(state, x_prior);
-    at->prior_pull = prior_information * d;
-    at->cost = inv_r * residual_squared + d.dot(at->prior_pull);
+    at->prior_pull = prior_is_diagonal ? Vector6d(prior_information.diagonal().cwiseProduct(d))
+                                       : Vector6d(prior_information * d);
+    at->cost = inv_r * at->sums.residual_squared + d.dot(at->prior_pull);
     return true;
   }
   // The update's information matrix P^-1 + R^-1 H^T H at a state.
-  Matrix6d information(const Linearisation& at) const { return prior_information + inv_r * at.HtH; }
+  Symmetric6 information(const Linearisation& at) const {
+    Symmetric6 I;
+    for (int k = 0; k < 21; ++k)
+      I.lower[k] = prior_information_lower.lower[k] + inv_r * at.sums.HtH.lower[k];
+    return I;
+  }
+  // The gradient of the cost at a state, halved: R^-1 H^T r - P^-1 (x - x_prior).
+  Vector6d gradient(const Linearisation& at) const {
+    return inv_r * Eigen::Map<const Vector6d>(at.sums.Htr) - at.prior_pull;
+  }
 };
 
 MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
                  const EkfOptions& options, EkfInstructionSet set) {
-  return {EkfPoints(c), detail::ekf_measurement(set), state_from_pose(prior),
-          inverse_spd(prior_covariance),
-          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px)};
+  const Matrix6d prior_information = inverse_spd(lower_triangle(prior_covariance));
+  const Matrix6d off_diagonal =
+      prior_information - Matrix6d(prior_information.diagonal().asDiagonal());
+  return {EkfPoints(c),
+          detail::ekf_measurement(set),
+          state_from_pose(prior),
+          prior_information,
+          lower_triangle(prior_information),
+          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px),
+          (off_diagonal.array() == 0).all()};
 }
 
 // Levenberg-Marquardt damping of the Gauss-Newton step and its schedule,
@@ -217,13 +187,16 @@ struct DampedStep {
 // between planar poses. `next` receives the system at x + step (written in
 // place: the caller swaps it with `at`, no 6x6 copies per iteration).
 inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linearisation& at,
-                              const Matrix6d& information, const Vector6d& gradient,
+                              const Symmetric6& information, const Vector6d& gradient,
                               Damping* damping, Linearisation* next) {
   DampedStep out;
   while (damping->lambda <= 1e10) {
-    out.step = solve_spd(information, gradient, 1.0 + damping->lambda);
+    out.step = detail::solve_spd(information, gradient, 1.0 + damping->lambda);
     if (!out.step.allFinite()) break;
-    const double predicted = 2 * out.step.dot(gradient) - out.step.dot(information * out.step);
+    // The model's decrease 2 s.g - s.I.s, with I s = g - lambda diag(I) s
+    // (the damped system solved): s.g + lambda sum I_ii s_i^2, no 6x6 product.
+    const double predicted =
+        out.step.dot(gradient) + damping->lambda * information.diagonal().dot(out.step.cwiseAbs2());
     // A step the model does not predict to lower the cost is refused without
     // evaluating it.
     if (predicted > 0) {
@@ -250,7 +223,7 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
 // update, how many updates, and why they stopped.
 struct Updates {
   Vector6d x;
-  Matrix6d information;
+  Symmetric6 information;
   int iterations = 0;
   Termination termination = Termination::kMaxIterations;
 };
@@ -271,12 +244,12 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
                            Linearisation* next) {
   Updates u;
   u.x = map.x_prior;
-  u.information = map.prior_information;
+  u.information = map.prior_information_lower;
   Damping damping;
   for (int it = 1; it <= options.max_iterations; ++it) {
     u.iterations = it;
     u.information = map.information(*at);
-    const Vector6d gradient = map.inv_r * at->Htr - at->prior_pull;
+    const Vector6d gradient = map.gradient(*at);
     const DampedStep d = damped_step(map, u.x, *at, u.information, gradient, &damping, next);
     if (!d.step.allFinite()) {
       u.termination = Termination::kNumericalFailure;
@@ -324,11 +297,10 @@ Updates run_updates(EkfInstructionSet set, const MapCost& map, const EkfOptions&
 void settle_termination(const MapCost& map, const Vector6d& x, const EkfOptions& options,
                         Estimate* e) {
   if (e->termination == Termination::kConverged) {
-    Matrix6d HtH;
-    Vector6d Htr;
-    double residual_squared = 0;
-    map.measurement(map.points, x, euler_trig(x), &HtH, &Htr, &residual_squared);
-    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(map.points.count)));
+    MeasurementSums sums;
+    map.measurement(map.points, x, euler_trig(x), &sums);
+    const double rms =
+        std::sqrt(sums.residual_squared / (2.0 * static_cast<double>(map.points.count)));
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
       e->message = "converged to a state whose residual (" + std::to_string(rms) +
                    " px RMS per coordinate) exceeds the gate of " +
@@ -357,7 +329,7 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
     e.termination = Termination::kBehindCamera;
     e.message = "the prior state puts an object point behind the camera";
     e.T_cam_target = pose_from_state(map.x_prior);
-    e.covariance = inverse_spd(map.prior_information);
+    e.covariance = inverse_spd(map.prior_information_lower);
     return e;
   }
   const Updates u = run_updates(set, map, options, &systems[0], &systems[1]);

@@ -1,0 +1,157 @@
+// Symmetric positive-definite 6x6 systems, stored by their lower triangle and
+// solved through 3x3 blocks: the information matrices of the iterated EKF
+// (vision/src/pose_ekf.cpp). Plain doubles at fixed offsets, so that the
+// compiler keeps a whole solve in registers. Internal to the EKF.
+#pragma once
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <cmath>
+
+namespace vision::detail {
+
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+
+// Where entry (i, j), j <= i, of a symmetric 6x6 matrix is kept: row by row.
+constexpr int lower_index(int i, int j) {
+  return i * (i + 1) / 2 + j;
+}
+
+// A symmetric 6x6 matrix by its lower triangle (lower_index).
+struct Symmetric6 {
+  double lower[21];
+
+  double operator()(int i, int j) const {
+    return i >= j ? lower[lower_index(i, j)] : lower[lower_index(j, i)];
+  }
+  // The diagonal, in order.
+  Vector6d diagonal() const {
+    Vector6d d;
+    for (int i = 0; i < 6; ++i)
+      d(i) = lower[lower_index(i, i)];
+    return d;
+  }
+};
+
+// The lower triangle of a (symmetric) matrix; its upper one is not read.
+inline Symmetric6 lower_triangle(const Matrix6d& m) {
+  Symmetric6 s;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j <= i; ++j)
+      s.lower[lower_index(i, j)] = m(i, j);
+  return s;
+}
+
+inline Matrix6d full_matrix(const Symmetric6& s) {
+  Matrix6d m;
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j < 6; ++j)
+      m(i, j) = s(i, j);
+  return m;
+}
+
+// Entry (i, j) of a symmetric 3x3 matrix kept by its lower triangle.
+inline double symmetric3(const double m[6], int i, int j) {
+  return i >= j ? m[lower_index(i, j)] : m[lower_index(j, i)];
+}
+
+// The inverse of a symmetric 3x3 matrix in closed form (adjugate over
+// determinant), both by their lower triangles (m00, m10, m11, m20, m21, m22);
+// false when it is not invertible.
+inline bool inverse3_symmetric(const double m[6], double inv[6]) {
+  const double m00 = m[0], m10 = m[1], m11 = m[2], m20 = m[3], m21 = m[4], m22 = m[5];
+  const double c00 = m11 * m22 - m21 * m21;
+  const double c01 = m20 * m21 - m10 * m22;
+  const double c02 = m10 * m21 - m20 * m11;
+  const double det = m00 * c00 + m10 * c01 + m20 * c02;
+  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
+  const double s = 1.0 / det;
+  const double c11 = m00 * m22 - m20 * m20;
+  const double c12 = m10 * m20 - m00 * m21;
+  const double c22 = m00 * m11 - m10 * m10;
+  inv[0] = c00 * s;
+  inv[1] = c01 * s;
+  inv[2] = c11 * s;
+  inv[3] = c02 * s;
+  inv[4] = c12 * s;
+  inv[5] = c22 * s;
+  return true;
+}
+
+// A symmetric positive-definite 6x6 system in 3x3 blocks (angles,
+// translation), its diagonal multiplied by `diagonal_scale` (the
+// Levenberg-Marquardt damping, 1 + lambda): A = [A11 A21^T; A21 A22],
+// eliminated through the Schur complement S = A22 - A21 A11^-1 A21^T with
+// both 3x3 inverses in closed form. No pivoting (the blocks of a
+// positive-definite matrix and its Schur complement are positive definite),
+// two divisions, short dependency chains. `ok` is false when a block is
+// singular to rounding.
+struct Spd6 {
+  double inv11[6], inv_schur[6];  // lower triangles
+  double A21[3][3], W[3][3];      // W = A11^-1 A21^T
+  bool ok = false;
+
+  explicit Spd6(const Symmetric6& A, double diagonal_scale = 1.0) {
+    const double* a = A.lower;
+    const double A11[6] = {a[0] * diagonal_scale, a[1], a[2] * diagonal_scale, a[3], a[4],
+                           a[5] * diagonal_scale};
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k)
+        A21[i][k] = a[lower_index(3 + i, k)];
+    if (!inverse3_symmetric(A11, inv11)) return;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        W[i][j] = inv3(i, 0) * A21[j][0] + inv3(i, 1) * A21[j][1] + inv3(i, 2) * A21[j][2];
+    double schur[6];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j <= i; ++j)
+        schur[lower_index(i, j)] =
+            a[lower_index(3 + i, 3 + j)] * (i == j ? diagonal_scale : 1.0) -
+            (A21[i][0] * W[0][j] + A21[i][1] * W[1][j] + A21[i][2] * W[2][j]);
+    ok = inverse3_symmetric(schur, inv_schur);
+  }
+
+  // A^-1 b (of the scaled A).
+  Vector6d solve(const Vector6d& b) const {
+    double y1[3], r[3], x2[3];
+    for (int i = 0; i < 3; ++i)
+      y1[i] = inv3(i, 0) * b(0) + inv3(i, 1) * b(1) + inv3(i, 2) * b(2);
+    for (int i = 0; i < 3; ++i)
+      r[i] = b(3 + i) - (A21[i][0] * y1[0] + A21[i][1] * y1[1] + A21[i][2] * y1[2]);
+    for (int i = 0; i < 3; ++i)
+      x2[i] = schur_inv(i, 0) * r[0] + schur_inv(i, 1) * r[1] + schur_inv(i, 2) * r[2];
+    Vector6d x;
+    for (int i = 0; i < 3; ++i) {
+      x(i) = y1[i] - (W[i][0] * x2[0] + W[i][1] * x2[1] + W[i][2] * x2[2]);
+      x(3 + i) = x2[i];
+    }
+    return x;
+  }
+
+ private:
+  double inv3(int i, int j) const { return symmetric3(inv11, i, j); }
+  double schur_inv(int i, int j) const { return symmetric3(inv_schur, i, j); }
+};
+
+// A^-1 b for the symmetric positive-definite A, its diagonal multiplied by
+// `diagonal_scale` (Eigen's pivoting LDLT when a pivot fails).
+inline Vector6d solve_spd(const Symmetric6& A, const Vector6d& b, double diagonal_scale = 1.0) {
+  const Spd6 factors(A, diagonal_scale);
+  if (factors.ok) return factors.solve(b);
+  Matrix6d scaled = full_matrix(A);
+  scaled.diagonal() *= diagonal_scale;
+  return scaled.ldlt().solve(b);
+}
+
+// A^-1 of the symmetric positive-definite A, column by column.
+inline Matrix6d inverse_spd(const Symmetric6& A) {
+  const Spd6 factors(A);
+  if (!factors.ok) return full_matrix(A).ldlt().solve(Matrix6d::Identity());
+  Matrix6d inverse;
+  for (int j = 0; j < 6; ++j)
+    inverse.col(j) = factors.solve(Vector6d::Unit(j));
+  return inverse;
+}
+
+}  // namespace vision::detail
