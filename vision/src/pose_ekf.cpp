@@ -122,9 +122,8 @@ struct MapCost {
   EkfPoints points;
   detail::EkfMeasurement measurement;
   Vector6d x_prior;
-  Matrix6d prior_information;          // P^-1
-  Symmetric6 prior_information_lower;  // the same, by its lower triangle
-  double inv_r;                        // R^-1 = 1 / sigma^2, px^-2
+  Symmetric6 prior_information;  // P^-1
+  double inv_r;                  // R^-1 = 1 / sigma^2, px^-2
   // P^-1 has exact zeros off its diagonal (the nominal prior, the analytic
   // start): its product with a state difference is then the diagonal's, which
   // gives the same bits without the 30 products by zero.
@@ -136,7 +135,7 @@ struct MapCost {
     if (!measurement(points, state, at->trig, &at->sums)) return false;
     const Vector6d d = state_difference(state, x_prior);
     at->prior_pull = prior_is_diagonal ? Vector6d(prior_information.diagonal().cwiseProduct(d))
-                                       : Vector6d(prior_information * d);
+                                       : prior_information * d;
     at->cost = inv_r * at->sums.residual_squared + d.dot(at->prior_pull);
     return true;
   }
@@ -144,7 +143,7 @@ struct MapCost {
   Symmetric6 information(const Linearisation& at) const {
     Symmetric6 I;
     for (int k = 0; k < 21; ++k)
-      I.lower[k] = prior_information_lower.lower[k] + inv_r * at.sums.HtH.lower[k];
+      I.lower[k] = prior_information.lower[k] + inv_r * at.sums.HtH.lower[k];
     return I;
   }
   // The gradient of the cost at a state, halved: R^-1 H^T r - P^-1 (x - x_prior).
@@ -155,16 +154,14 @@ struct MapCost {
 
 MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
                  const EkfOptions& options, EkfInstructionSet set) {
-  const Matrix6d prior_information = inverse_spd(lower_triangle(prior_covariance));
-  const Matrix6d off_diagonal =
-      prior_information - Matrix6d(prior_information.diagonal().asDiagonal());
+  const Symmetric6 prior_information =
+      lower_triangle(inverse_spd(lower_triangle(prior_covariance)));
   return {EkfPoints(c),
           detail::ekf_measurement(set),
           state_from_pose(prior),
           prior_information,
-          lower_triangle(prior_information),
           1.0 / (options.measurement_sigma_px * options.measurement_sigma_px),
-          (off_diagonal.array() == 0).all()};
+          prior_information.is_diagonal()};
 }
 
 // Levenberg-Marquardt damping of the Gauss-Newton step and its schedule,
@@ -244,7 +241,7 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
                            Linearisation* next) {
   Updates u;
   u.x = map.x_prior;
-  u.information = map.prior_information_lower;
+  u.information = map.prior_information;
   Damping damping;
   for (int it = 1; it <= options.max_iterations; ++it) {
     u.iterations = it;
@@ -329,7 +326,7 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
     e.termination = Termination::kBehindCamera;
     e.message = "the prior state puts an object point behind the camera";
     e.T_cam_target = pose_from_state(map.x_prior);
-    e.covariance = inverse_spd(map.prior_information_lower);
+    e.covariance = inverse_spd(map.prior_information);
     return e;
   }
   const Updates u = run_updates(set, map, options, &systems[0], &systems[1]);

@@ -32,6 +32,24 @@ struct Symmetric6 {
       d(i) = lower[lower_index(i, i)];
     return d;
   }
+  // True when every entry off the diagonal is exactly zero.
+  bool is_diagonal() const {
+    for (int i = 1; i < 6; ++i)
+      for (int j = 0; j < i; ++j)
+        if (lower[lower_index(i, j)] != 0) return false;
+    return true;
+  }
+  // This matrix times v.
+  Vector6d operator*(const Vector6d& v) const {
+    Vector6d out;
+    for (int i = 0; i < 6; ++i) {
+      double sum = 0;
+      for (int j = 0; j < 6; ++j)
+        sum += (*this)(i, j) * v(j);
+      out(i) = sum;
+    }
+    return out;
+  }
 };
 
 // The lower triangle of a (symmetric) matrix; its upper one is not read.
