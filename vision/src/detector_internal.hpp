@@ -40,6 +40,18 @@ inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double m
          p.y() <= gray.rows - 1 - margin;
 }
 
+// Step 1's edge map of an 8-bit image: cv::Canny(image, *edges, canny_low,
+// canny_high, 3, false), bit for bit (tests/vision/detector_edge_map_test.cpp),
+// in less time.
+void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges);
+
+// Steps 2-3 on the edge map of the image reduced `decimation` (1 or 2) times:
+// the smoothing (smoothing_kernel_px) and the dilation (dilation_kernel_px),
+// both sizes in full-resolution pixels. Only which pixels end non-zero is
+// defined, which is all findContours reads: at decimation 1, exactly those of
+// cv::GaussianBlur by the one kernel then cv::dilate by the other.
+void close_edge_gaps(const DetectorParameters& p, int decimation, cv::Mat* edges);
+
 // Steps 1-7 of the paper: convex, near-right-angled quadrilaterals, largest
 // perimeter first. Fills stats->contours and stats->candidates.
 std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParameters& p,

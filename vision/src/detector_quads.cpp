@@ -22,16 +22,6 @@ double max_abs_corner_cos(const Quad& q) {
   return worst;
 }
 
-// cv::Canny(image, edges, low, high, 3, false), bit for bit: its first
-// step is the 3x3 Sobel derivatives with BORDER_REPLICATE, which
-// cv::spatialGradient computes in one pass over the image instead of two
-// (a quarter less time for the whole of Canny on a half-resolution frame).
-void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges) {
-  cv::Mat dx, dy;
-  cv::spatialGradient(image, dx, dy, 3, cv::BORDER_REPLICATE);
-  cv::Canny(dx, dy, *edges, p.canny_low, p.canny_high, false);
-}
-
 // Visually clockwise in the image (y down) <=> positive z of (q1-q0) x (q2-q1).
 void make_clockwise(Quad* q) {
   double area2 = 0;
@@ -44,6 +34,38 @@ void make_clockwise(Quad* q) {
 }
 
 }  // namespace
+
+void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges) {
+  // cv::Canny's first step is the 3x3 Sobel derivatives with
+  // BORDER_REPLICATE, which cv::spatialGradient computes in one pass over the
+  // image instead of two (a quarter less time for the whole of Canny on a
+  // half-resolution frame).
+  cv::Mat dx, dy;
+  cv::spatialGradient(image, dx, dy, 3, cv::BORDER_REPLICATE);
+  cv::Canny(dx, dy, *edges, p.canny_low, p.canny_high, false);
+}
+
+void close_edge_gaps(const DetectorParameters& p, int decimation, cv::Mat* edges) {
+  // findContours sees only which pixels are non-zero, and a 3x3 Gaussian of
+  // a 0/255 edge map is non-zero exactly on the kernel's footprint (its
+  // smallest weight, 1/16, gives 16 grey levels): so the two steps are one
+  // dilation by their Minkowski sum, a square of smooth + grow - 1 px, at a
+  // third of the cost. The kernels are in full-resolution pixels; with
+  // decimation the square shrinks by it, rounded up to an odd size.
+  const auto scaled = [decimation](int k) {
+    return k <= 1 ? 1 : ((k + decimation - 1) / decimation) | 1;
+  };
+  const int smooth = std::max(p.smoothing_kernel_px, 1), grow = std::max(p.dilation_kernel_px, 1);
+  if (smooth > 3) {
+    cv::GaussianBlur(*edges, *edges, cv::Size(scaled(smooth), scaled(smooth)), 0);
+    if (scaled(grow) > 1)
+      cv::dilate(*edges, *edges,
+                 cv::getStructuringElement(cv::MORPH_RECT, cv::Size(scaled(grow), scaled(grow))));
+  } else if (scaled(smooth + grow - 1) > 1) {
+    const int k = scaled(smooth + grow - 1);
+    cv::dilate(*edges, *edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+  }
+}
 
 std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParameters& p,
                                        DetectorStats* stats) {
@@ -66,24 +88,8 @@ std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParame
     canny_edges(gray, p, &edges);
   }
   // Step 2: smoothing joins edge pixels a pixel apart; step 3: dilation
-  // closes the remaining holes. findContours sees only which pixels are
-  // non-zero, and a 3x3 Gaussian of a 0/255 edge map is non-zero exactly on
-  // the kernel's footprint (its smallest weight, 1/16, gives 16 grey levels):
-  // so the two steps are one dilation by their Minkowski sum, a square of
-  // smooth + grow - 1 px, at a third of the cost (checked bit for bit on
-  // noisy edge maps). The kernels are in full-resolution pixels; with
-  // decimation the square shrinks by d, rounded up to an odd size.
-  const auto scaled = [d](int k) { return k <= 1 ? 1 : ((k + d - 1) / d) | 1; };
-  const int smooth = std::max(p.smoothing_kernel_px, 1), grow = std::max(p.dilation_kernel_px, 1);
-  if (smooth > 3) {
-    cv::GaussianBlur(edges, edges, cv::Size(scaled(smooth), scaled(smooth)), 0);
-    if (scaled(grow) > 1)
-      cv::dilate(edges, edges,
-                 cv::getStructuringElement(cv::MORPH_RECT, cv::Size(scaled(grow), scaled(grow))));
-  } else if (scaled(smooth + grow - 1) > 1) {
-    const int k = scaled(smooth + grow - 1);
-    cv::dilate(edges, edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
-  }
+  // closes the remaining holes.
+  close_edge_gaps(p, d, &edges);
 
   std::vector<std::vector<cv::Point>> contours;
   cv::findContours(edges, contours, cv::RETR_LIST, cv::CHAIN_APPROX_SIMPLE);

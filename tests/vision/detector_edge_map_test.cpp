@@ -1,0 +1,121 @@
+// The candidate stage of the detector (vision/src/detector_quads.cpp) computes
+// two of the paper's steps in less time than their textbook form and promises
+// the same result: its edge map is cv::Canny's bit for bit, and its smoothing
+// and dilation of the edge map leave non-zero exactly the pixels that
+// cv::GaussianBlur then cv::dilate leave non-zero. findContours reads nothing
+// else, so the candidates are the textbook pipeline's. Both promises rest on
+// OpenCV's internals (Canny's Sobel step and border, the fixed-point 3x3
+// Gaussian's smallest weight), which is why they are checked here and not
+// only argued. Every image is seeded: the tests are deterministic.
+#include <gtest/gtest.h>
+
+#include <opencv2/imgproc.hpp>
+#include <random>
+#include <string>
+
+#include "detector_internal.hpp"
+
+namespace {
+
+// A camera-like scene: random grey polygons, some cut by the border, blurred
+// by 0.8 px and with Gaussian noise of 6 grey levels.
+cv::Mat scene(int cols, int rows, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> grey(0, 255);
+  cv::Mat image(rows, cols, CV_8UC1, cv::Scalar(grey(rng)));
+  std::uniform_int_distribution<int> x(-cols / 4, cols + cols / 4), y(-rows / 4, rows + rows / 4);
+  for (int k = 0; k < 40; ++k) {
+    std::vector<cv::Point> polygon;
+    for (int v = 0; v < 4; ++v)
+      polygon.emplace_back(x(rng), y(rng));
+    cv::fillPoly(image, std::vector<std::vector<cv::Point>>{polygon}, cv::Scalar(grey(rng)));
+  }
+  cv::GaussianBlur(image, image, cv::Size(0, 0), 0.8);
+  cv::Mat noise(rows, cols, CV_16SC1);
+  cv::RNG(seed).fill(noise, cv::RNG::NORMAL, 0, 6);
+  cv::Mat noisy;
+  cv::add(image, noise, noisy, cv::noArray(), CV_8U);
+  return noisy;
+}
+
+// A 0/255 map with a fraction `density` of its pixels set, borders included.
+cv::Mat sparse_edges(int cols, int rows, double density, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::bernoulli_distribution on(density);
+  cv::Mat edges(rows, cols, CV_8UC1);
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c < cols; ++c)
+      edges.at<std::uint8_t>(r, c) = on(rng) ? 255 : 0;
+  return edges;
+}
+
+int pixels_that_differ(const cv::Mat& a, const cv::Mat& b) {
+  cv::Mat differ;
+  cv::compare(a, b, differ, cv::CMP_NE);
+  return cv::countNonZero(differ);
+}
+
+struct ImageSize {
+  int cols, rows;
+};
+// Half of the paper's 736x571 and of a 5 MP GigE sensor (the candidate stage
+// runs at half resolution by default), and small and thin images.
+const ImageSize kSizes[] = {{368, 286}, {1224, 1024}, {37, 23}, {5, 5}, {3, 120}, {120, 3}};
+
+TEST(DetectorEdgeMap, CannyEdgesAreOpenCvCannyBitForBit) {
+  const std::pair<double, double> thresholds[] = {{25, 50}, {0, 0}, {10, 200}, {50, 50}};
+  unsigned seed = 1;
+  for (const ImageSize& size : kSizes) {
+    for (const auto& [low, high] : thresholds) {
+      const cv::Mat image = scene(size.cols, size.rows, seed++);
+      vision::DetectorParameters p;
+      p.canny_low = low;
+      p.canny_high = high;
+      cv::Mat ours, theirs;
+      vision::detail::canny_edges(image, p, &ours);
+      cv::Canny(image, theirs, low, high, 3, false);
+      ASSERT_EQ(ours.size(), theirs.size());
+      ASSERT_EQ(ours.type(), theirs.type());
+      EXPECT_EQ(pixels_that_differ(ours, theirs), 0)
+          << size.cols << "x" << size.rows << ", thresholds " << low << "/" << high;
+      // Not vacuous: the scenes have edges.
+      if (size.cols * size.rows > 1000) {
+        EXPECT_GT(cv::countNonZero(theirs), 0);
+      }
+    }
+  }
+}
+
+TEST(DetectorEdgeMap, ClosingGapsLeavesTheNonZeroPixelsOfBlurThenDilate) {
+  unsigned seed = 100;
+  for (const ImageSize& size : kSizes) {
+    std::vector<std::pair<std::string, cv::Mat>> maps;
+    cv::Mat canny;
+    cv::Canny(scene(size.cols, size.rows, seed++), canny, 25, 50, 3, false);
+    maps.emplace_back("Canny of a scene", canny);
+    for (double density : {0.01, 0.1, 0.5})
+      maps.emplace_back("density " + std::to_string(density),
+                        sparse_edges(size.cols, size.rows, density, seed++));
+    for (const auto& [what, edges] : maps) {
+      for (int smooth : {0, 1, 3, 5, 7}) {
+        for (int grow : {0, 1, 3, 5}) {
+          cv::Mat expected = edges.clone();
+          if (smooth > 1) cv::GaussianBlur(expected, expected, cv::Size(smooth, smooth), 0);
+          if (grow > 1)
+            cv::dilate(expected, expected,
+                       cv::getStructuringElement(cv::MORPH_RECT, cv::Size(grow, grow)));
+          vision::DetectorParameters p;
+          p.smoothing_kernel_px = smooth;
+          p.dilation_kernel_px = grow;
+          cv::Mat ours = edges.clone();
+          vision::detail::close_edge_gaps(p, 1, &ours);
+          EXPECT_EQ(pixels_that_differ(ours != 0, expected != 0), 0)
+              << size.cols << "x" << size.rows << ", " << what << ", smoothing " << smooth
+              << " px, dilation " << grow << " px";
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
