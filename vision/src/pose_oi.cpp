@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <complex>
+#include <limits>
 
 #include "vision/pose_analytic.hpp"
 
@@ -171,8 +172,12 @@ constexpr int kNewtonSteps = 20;
 // second order, vec(R + [w]x R + [w]x^2 R / 2), so E's gradient and Hessian
 // in w are exact at w = 0 from G. Each step is kept only when it lowers E, so
 // the minimum reached is OI's own. Returns whether it reached a strict
-// minimum (positive-definite Hessian) to step_tolerance_rad, or E's rounding
-// floor (noise-free data).
+// minimum (positive-definite Hessian) to rounding, or E's rounding floor
+// (noise-free data). Near frontal E is so flat across the valley (smallest
+// curvature ~1e-4 of the largest) that rounding, not the step's length, ends
+// the descent: the model's remaining decrease g^T H^-1 g / 2 falls below
+// the last bit of E, or below the rounding of vec(R)^T G vec(R) where no
+// step lowers E any more.
 bool newton_finish(const OiProblem& p, double floor, Matrix32d* R, double* error, int max_steps,
                    int* steps_taken) {
   constexpr double step_tolerance_rad = 1e-11;
@@ -204,7 +209,11 @@ bool newton_finish(const OiProblem& p, double floor, Matrix32d* R, double* error
     const Eigen::Vector3d w =
         -eig.eigenvectors() * (g_eigen.array() / (lambda.array() + shift)).matrix();
     const double angle = w.norm();
-    if (strict_minimum && (angle < step_tolerance_rad || *error <= floor)) return true;
+    constexpr double eps = std::numeric_limits<double>::epsilon();
+    const double remaining = 0.5 * -g.dot(w);  // the model's decrease to its minimum
+    if (strict_minimum &&
+        (angle < step_tolerance_rad || remaining <= eps * *error || *error <= floor))
+      return true;
     // Backtracking: in the flat valley E is far from quadratic over a full
     // step; halving until E drops keeps every accepted step a descent.
     bool lowered = false;
@@ -218,7 +227,10 @@ bool newton_finish(const OiProblem& p, double floor, Matrix32d* R, double* error
         lowered = true;
       }
     }
-    if (!lowered) return strict_minimum && angle < 1e3 * step_tolerance_rad;
+    if (!lowered) {
+      const double rounding = eps * r.cwiseAbs().dot(p.G.cwiseAbs() * r.cwiseAbs());
+      return strict_minimum && (angle < 1e3 * step_tolerance_rad || remaining <= rounding);
+    }
   }
   return false;
 }
