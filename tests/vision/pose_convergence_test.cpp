@@ -78,7 +78,8 @@ TEST(OiConvergence, HybridOiConvergesOnEveryBenchmarkPose) {
 // ~1e-9) while still ~1e-7 rad from the exact minimum along the flat
 // direction. Both solvers must call that converged, and, both minimising the
 // same E, agree: the flat direction is resolved to sqrt(2 x 1e-19 / 1.4e-6)
-// = 4e-7 rad, which moves a pose 1 m away by 0.4 um; the bar is 2 um.
+// = 4e-7 rad, which moves a pose 1 m away by 0.4 um, so two runs that each
+// stop within that of the minimum are within 0.8 um of each other.
 TEST(OiConvergence, ConvergesNearFrontalOnSweepCorners) {
   const vision::Camera camera = vision::Camera::paper_default();
   const double h = 0.025;  // half the marker's side, m
@@ -98,7 +99,7 @@ TEST(OiConvergence, ConvergesNearFrontalOnSweepCorners) {
     const vision::Estimate hybrid = vision::make_solver("hybrid_oi")->solve(c);
     EXPECT_TRUE(oi.converged) << oi.message;
     EXPECT_TRUE(hybrid.converged) << hybrid.message;
-    EXPECT_LT((oi.T_cam_target.t - hybrid.T_cam_target.t).norm(), 2e-6);
+    EXPECT_LT((oi.T_cam_target.t - hybrid.T_cam_target.t).norm(), 0.8e-6);
   }
 }
 
