@@ -38,7 +38,11 @@
 //   all frames; wall times inside measure, so with T > 1 they include the
 //   threads' contention), truth_ms, record_ms (to_frame_record), store_ms
 //   (append_position, commit included); markers_per_frame (detected);
-//   positions_per_s_median (1 / the median time between two positions done).
+//   positions_per_s_median (1 / the median time between two positions done);
+//   cpu_ms (CPU time of every thread of the process, user + system, per
+//   position: with T threads on T cores, T x the wall time per position when
+//   no core ever waits; T = 1 leaves OpenCV's own parallel loops on, so there
+//   it can exceed the wall time).
 //   BM_EstimateInsertRate/durable:D       append_position of a real 3-frame
 //                                          position (4 detections, 10 solvers x
 //                                          2 scopes per frame = 60 estimate
@@ -60,6 +64,7 @@
 #include <benchmark/benchmark.h>
 #include <sqlite3.h>
 #include <stdlib.h>
+#include <sys/resource.h>
 
 #include <algorithm>
 #include <chrono>
@@ -147,7 +152,16 @@ struct StageSums {
   double detect = 0, solve = 0, truth = 0, record = 0, store = 0;
   std::int64_t frames = 0, detections = 0;
   std::vector<double> position_s;  // wall time of each whole position
+  double process_cpu_s = 0;        // CPU time of every thread of the process
 };
+
+// CPU time of every thread of the process so far (user + system), seconds.
+double process_cpu_seconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  const auto s = [](const timeval& t) { return static_cast<double>(t.tv_sec) + 1e-6 * t.tv_usec; };
+  return s(u.ru_utime) + s(u.ru_stime);
+}
 
 // A position whose frames are in the pool: what the controller's acquire
 // leaves for finish (rig/sweep/src/controller.cpp).
@@ -279,6 +293,7 @@ void report_stages(benchmark::State& state, const StageSums& sums, std::int64_t 
   if (sums.store > 0) state.counters["store_ms"] = 1e3 * sums.store / n;
   state.counters["markers_per_frame"] =
       sums.frames ? static_cast<double>(sums.detections) / static_cast<double>(sums.frames) : 0;
+  state.counters["cpu_ms"] = 1e3 * sums.process_cpu_s / n;
   if (!sums.position_s.empty())
     state.counters["positions_per_s_median"] = 1 / median(sums.position_s);
   state.SetItemsProcessed(positions);  // positions per second, mean
@@ -295,6 +310,7 @@ void run_positions(benchmark::State& state, int frames, int threads, bool ahead,
   std::int64_t next = 0;
   std::optional<AcquiredPosition> pending;
   auto last_done = Clock::now();
+  const double cpu_start = process_cpu_seconds();
   for (auto _ : state) {
     if (!pending) pending = acquire_position(pool, rig, next++, frames);
     std::optional<AcquiredPosition> following;
@@ -311,6 +327,7 @@ void run_positions(benchmark::State& state, int frames, int threads, bool ahead,
     sums.position_s.push_back(std::chrono::duration<double>(done - last_done).count());
     last_done = done;
   }
+  sums.process_cpu_s = process_cpu_seconds() - cpu_start;
   report_stages(state, sums, state.iterations());
 }
 
