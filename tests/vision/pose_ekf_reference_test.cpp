@@ -207,7 +207,8 @@ void settle_termination(const Correspondences& c, const Vector6d& x, const EkfOp
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
       e->message = "converged to a state whose residual (" + std::to_string(rms) +
                    " px RMS per coordinate) exceeds the gate of " +
-                   std::to_string(options.gate_sigmas) + " measurement sigmas: a local minimum";
+                   std::to_string(options.gate_sigmas) +
+                   " measurement sigmas: a wrong local minimum, or corners that no one pose fits";
       e->termination = Termination::kLocalMinimum;
       e->converged = false;
       return;

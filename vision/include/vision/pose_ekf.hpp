@@ -57,7 +57,9 @@ struct EkfOptions {
   int max_iterations = 100;
   double state_tolerance = 1e-7;
   // Consistency gate: a converged state whose RMS residual exceeds this many
-  // measurement sigmas is a wrong local minimum and is reported converged = false.
+  // measurement sigmas is reported converged = false (kLocalMinimum): a wrong
+  // local minimum, or corners that no one pose fits (a corner mislocated by
+  // its detector, which every solver then explains as badly).
   double gate_sigmas = 5.0;
   // The build of the inner loops to run; unset, or one the CPU does not run:
   // the fastest it runs. Tests set it to check each build.
