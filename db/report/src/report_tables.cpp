@@ -415,7 +415,9 @@ void add_detector_tables(const ReportInput& in, Section& sec) {
                 "from the true corners (the layout projected through the run's camera at the "
                 "true pose from the bench read-back and the rig geometry), px, over the "
                 "detections within 10 px of it (misplaced: farther, an id decoded elsewhere), "
-                "and mean detector time per frame",
+                "and mean detector time per frame. The truth is only as good as the run's "
+                "camera calibration and rig geometry, whose errors enter every detector's RMS "
+                "alike: compare the detectors with each other",
                 {"detector", "found", "in view", "rate", "corner RMS vs truth (px)",
                  "detections with truth", "misplaced", "time per frame (s)"},
                 {}};
