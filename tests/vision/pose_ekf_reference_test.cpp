@@ -2,9 +2,9 @@
 // 10.1007/s00138-008-0170-y) gives the same iterates as its straightforward
 // first implementation, kept here as the reference: generic Eigen products
 // for the Jacobian and H^T H, LDLT solves, std::remainder and std::pow. The
-// solver's faster form (written-out rows of H, H^T H on one triangle, an
-// unrolled Cholesky, cheaper angle wrapping) is the same method in another
-// order of floating-point operations.
+// solver's faster form (written-out rows of H, H^T H on one triangle, the
+// 6x6 solve in 3x3 blocks, cheaper angle wrapping) is the same method in
+// another order of floating-point operations.
 //
 // The k-th iterate of either is its result with max_iterations = k, so every
 // iterate is compared, not only the last. Where the reference converges

@@ -198,10 +198,13 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
     // A step the model does not predict to lower the cost is refused without
     // evaluating it.
     if (predicted > 0) {
+      // Its reciprocal now, while the trial state is measured: the gain below
+      // then waits for a multiplication, not for a division.
+      const double inv_predicted = 1.0 / predicted;
       const Vector6d trial = x + out.step;
       next->trig = euler_trig_after(at.trig, out.step, trial);
       if (map.evaluate(trial, next) && next->cost <= at.cost) {
-        const double gain = (at.cost - next->cost) / predicted;
+        const double gain = (at.cost - next->cost) * inv_predicted;
         if (gain > 0) {
           out.accepted = true;
           const double ratio = 2 * gain - 1;

@@ -74,40 +74,40 @@ inline double symmetric3(const double m[6], int i, int j) {
   return i >= j ? m[lower_index(i, j)] : m[lower_index(j, i)];
 }
 
-// The inverse of a symmetric 3x3 matrix in closed form (adjugate over
-// determinant), both by their lower triangles (m00, m10, m11, m20, m21, m22);
-// false when it is not invertible.
-inline bool inverse3_symmetric(const double m[6], double inv[6]) {
+// The adjugate of a symmetric 3x3 matrix and its determinant, both from its
+// lower triangle (m00, m10, m11, m20, m21, m22); the adjugate by its lower
+// triangle too. The inverse is adj / det; false when it does not exist.
+struct Adjugate3 {
+  double adj[6];
+  double det;
+};
+
+inline bool adjugate3_symmetric(const double m[6], Adjugate3* out) {
   const double m00 = m[0], m10 = m[1], m11 = m[2], m20 = m[3], m21 = m[4], m22 = m[5];
-  const double c00 = m11 * m22 - m21 * m21;
-  const double c01 = m20 * m21 - m10 * m22;
-  const double c02 = m10 * m21 - m20 * m11;
-  const double det = m00 * c00 + m10 * c01 + m20 * c02;
-  if (!(std::abs(det) > 0) || !std::isfinite(det)) return false;
-  const double s = 1.0 / det;
-  const double c11 = m00 * m22 - m20 * m20;
-  const double c12 = m10 * m20 - m00 * m21;
-  const double c22 = m00 * m11 - m10 * m10;
-  inv[0] = c00 * s;
-  inv[1] = c01 * s;
-  inv[2] = c11 * s;
-  inv[3] = c02 * s;
-  inv[4] = c12 * s;
-  inv[5] = c22 * s;
-  return true;
+  out->adj[0] = m11 * m22 - m21 * m21;
+  out->adj[1] = m20 * m21 - m10 * m22;
+  out->adj[2] = m00 * m22 - m20 * m20;
+  out->adj[3] = m10 * m21 - m20 * m11;
+  out->adj[4] = m10 * m20 - m00 * m21;
+  out->adj[5] = m00 * m11 - m10 * m10;
+  out->det = m00 * out->adj[0] + m10 * out->adj[1] + m20 * out->adj[3];
+  return std::abs(out->det) > 0 && std::isfinite(out->det);
 }
 
 // A symmetric positive-definite 6x6 system in 3x3 blocks (angles,
 // translation), its diagonal multiplied by `diagonal_scale` (the
 // Levenberg-Marquardt damping, 1 + lambda): A = [A11 A21^T; A21 A22],
-// eliminated through the Schur complement S = A22 - A21 A11^-1 A21^T with
-// both 3x3 inverses in closed form. No pivoting (the blocks of a
-// positive-definite matrix and its Schur complement are positive definite),
-// two divisions, short dependency chains. `ok` is false when a block is
-// singular to rounding.
+// eliminated through the Schur complement S = A22 - A21 A11^-1 A21^T, both
+// 3x3 inverses in closed form as adjugate over determinant. No pivoting (the
+// blocks of a positive-definite matrix and its Schur complement are positive
+// definite). Each determinant's division runs beside the products with its
+// adjugate, which are scaled by the reciprocal only once they are done: the
+// solve waits for two divisions, not for two inverses. `ok` is false when a
+// block is singular to rounding.
 struct Spd6 {
-  double inv11[6], inv_schur[6];  // lower triangles
-  double A21[3][3], W[3][3];      // W = A11^-1 A21^T
+  Adjugate3 a11, schur;  // of A11 and of S
+  double inv_det11 = 0, inv_det_schur = 0;
+  double A21[3][3], V[3][3];  // V = adj(A11) A21^T, so A11^-1 A21^T = V / det(A11)
   bool ok = false;
 
   explicit Spd6(const Symmetric6& A, double diagonal_scale = 1.0) {
@@ -117,39 +117,43 @@ struct Spd6 {
     for (int i = 0; i < 3; ++i)
       for (int k = 0; k < 3; ++k)
         A21[i][k] = a[lower_index(3 + i, k)];
-    if (!inverse3_symmetric(A11, inv11)) return;
+    if (!adjugate3_symmetric(A11, &a11)) return;
+    inv_det11 = 1.0 / a11.det;
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
-        W[i][j] = inv3(i, 0) * A21[j][0] + inv3(i, 1) * A21[j][1] + inv3(i, 2) * A21[j][2];
-    double schur[6];
+        V[i][j] = adj11(i, 0) * A21[j][0] + adj11(i, 1) * A21[j][1] + adj11(i, 2) * A21[j][2];
+    double S[6];
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j <= i; ++j)
-        schur[lower_index(i, j)] =
+        S[lower_index(i, j)] =
             a[lower_index(3 + i, 3 + j)] * (i == j ? diagonal_scale : 1.0) -
-            (A21[i][0] * W[0][j] + A21[i][1] * W[1][j] + A21[i][2] * W[2][j]);
-    ok = inverse3_symmetric(schur, inv_schur);
+            (A21[i][0] * V[0][j] + A21[i][1] * V[1][j] + A21[i][2] * V[2][j]) * inv_det11;
+    if (!adjugate3_symmetric(S, &schur)) return;
+    inv_det_schur = 1.0 / schur.det;
+    ok = true;
   }
 
   // A^-1 b (of the scaled A).
   Vector6d solve(const Vector6d& b) const {
     double y1[3], r[3], x2[3];
     for (int i = 0; i < 3; ++i)
-      y1[i] = inv3(i, 0) * b(0) + inv3(i, 1) * b(1) + inv3(i, 2) * b(2);
+      y1[i] = (adj11(i, 0) * b(0) + adj11(i, 1) * b(1) + adj11(i, 2) * b(2)) * inv_det11;
     for (int i = 0; i < 3; ++i)
       r[i] = b(3 + i) - (A21[i][0] * y1[0] + A21[i][1] * y1[1] + A21[i][2] * y1[2]);
     for (int i = 0; i < 3; ++i)
-      x2[i] = schur_inv(i, 0) * r[0] + schur_inv(i, 1) * r[1] + schur_inv(i, 2) * r[2];
+      x2[i] = (adj_schur(i, 0) * r[0] + adj_schur(i, 1) * r[1] + adj_schur(i, 2) * r[2]) *
+              inv_det_schur;
     Vector6d x;
     for (int i = 0; i < 3; ++i) {
-      x(i) = y1[i] - (W[i][0] * x2[0] + W[i][1] * x2[1] + W[i][2] * x2[2]);
+      x(i) = y1[i] - (V[i][0] * x2[0] + V[i][1] * x2[1] + V[i][2] * x2[2]) * inv_det11;
       x(3 + i) = x2[i];
     }
     return x;
   }
 
  private:
-  double inv3(int i, int j) const { return symmetric3(inv11, i, j); }
-  double schur_inv(int i, int j) const { return symmetric3(inv_schur, i, j); }
+  double adj11(int i, int j) const { return symmetric3(a11.adj, i, j); }
+  double adj_schur(int i, int j) const { return symmetric3(schur.adj, i, j); }
 };
 
 // A^-1 b for the symmetric positive-definite A, its diagonal multiplied by
