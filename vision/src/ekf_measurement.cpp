@@ -22,8 +22,8 @@ inline void sums_of(const Lanes& a, const Lanes& b, const Lanes& c, const Lanes&
 
 }  // namespace
 
-EkfPoints::EkfPoints(const Correspondences& c)
-    : count(c.size()), fx(c.camera->intrinsics().fx), fy(c.camera->intrinsics().fy) {
+EkfPoints::EkfPoints(const Correspondences& c) : count(c.size()) {
+  const double fx = c.camera->intrinsics().fx, fy = c.camera->intrinsics().fy;
   const size_t n = count;
   blocks.resize((n + 3) / 4);
   for (size_t b = 0; b < blocks.size(); ++b) {
@@ -36,6 +36,8 @@ EkfPoints::EkfPoints(const Correspondences& c)
       block.nx[lane] = c.normalized[i].x();
       block.ny[lane] = c.normalized[i].y();
       block.weight[lane] = 4 * b + lane < n ? 1.0 : 0.0;
+      block.fx_weight[lane] = fx * block.weight[lane];
+      block.fy_weight[lane] = fy * block.weight[lane];
     }
   }
 }
@@ -70,10 +72,10 @@ struct Projection {
   double sz, cz;                                  // psi
   double m00, m01, m02, m11, m12, m20, m21, m22;  // Ry Rx (m10 = 0)
   double r01, r02, r11, r12, r21, r22;            // columns 1 and 2 of R
-  double tx, ty, tz, fx, fy;                      // translation, m; focal lengths, px
+  double tx, ty, tz;                              // translation, m
 
-  Projection(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig)
-      : sz(trig.s[0]), cz(trig.c[0]), tx(x(3)), ty(x(4)), tz(x(5)), fx(points.fx), fy(points.fy) {
+  Projection(const Vector6d& x, const EulerTrig& trig)
+      : sz(trig.s[0]), cz(trig.c[0]), tx(x(3)), ty(x(4)), tz(x(5)) {
     const double sy = trig.s[1], cy = trig.c[1], sx = trig.s[2], cx = trig.c[2];
     m00 = cy;
     m01 = sy * sx;
@@ -111,8 +113,8 @@ inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t
   const Lanes inv_z = 1.0 / pz;
   const Lanes u = (RPx + r.tx) * inv_z, v = (RPy + r.ty) * inv_z;
   // Observed minus predicted pixel; padding lanes weigh nothing.
-  const Lanes ax = r.fx * inv_z * p.weight, by = r.fy * inv_z * p.weight;
-  const Lanes e0 = r.fx * (p.nx - u) * p.weight, e1 = r.fy * (p.ny - v) * p.weight;
+  const Lanes ax = inv_z * p.fx_weight, by = inv_z * p.fy_weight;
+  const Lanes e0 = (p.nx - u) * p.fx_weight, e1 = (p.ny - v) * p.fy_weight;
   const Lanes dphi_x = r.r02 * p.Y - r.r01 * p.Z, dphi_y = r.r12 * p.Y - r.r11 * p.Z,
               dphi_z = r.r22 * p.Y - r.r21 * p.Z;
   // The rotation columns of the two rows of H, pixels per radian.
@@ -154,7 +156,7 @@ inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t
 // instruction set its caller is.
 inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
                     MeasurementSums* out) {
-  const Projection r(points, x, trig);
+  const Projection r(x, trig);
   Lanes t[kTerms];
   if (!block_terms(points.blocks[0], r, t)) return false;
   for (size_t b = 1; b < points.blocks.size(); ++b) {

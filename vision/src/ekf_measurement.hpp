@@ -36,18 +36,18 @@ typedef double Lanes __attribute__((vector_size(32), aligned(8)));
 #define VISION_EKF_AVX2_FMA __attribute__((target("avx2,fma"))) VISION_EKF_INLINE_ALL
 #endif
 
-// The correspondences in blocks of four points (structure of arrays), with
-// the camera's focal lengths: the layout the measurement reads. The last
-// block is padded with copies of the last point at weight 0.
+// The correspondences in blocks of four points (structure of arrays): the
+// layout the measurement reads. The last block is padded with copies of the
+// last point at weight 0.
 struct EkfPoints {
   struct Block {
-    Lanes X, Y, Z;  // object point, target frame, metres
-    Lanes nx, ny;   // observed undistorted normalised coordinates
-    Lanes weight;   // 1 for a point, 0 for padding
+    Lanes X, Y, Z;               // object point, target frame, metres
+    Lanes nx, ny;                // observed undistorted normalised coordinates
+    Lanes weight;                // 1 for a point, 0 for padding
+    Lanes fx_weight, fy_weight;  // the focal lengths times the weight, pixels
   };
   std::vector<Block> blocks;
   std::size_t count = 0;  // points (the padding not counted)
-  double fx = 0, fy = 0;  // pixels
 
   explicit EkfPoints(const Correspondences& c);
 };

@@ -204,11 +204,12 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
       const Vector6d trial = x + out.step;
       next->trig = euler_trig_after(at.trig, out.step, trial);
       if (map.evaluate(trial, next) && next->cost <= at.cost) {
-        const double gain = (at.cost - next->cost) * inv_predicted;
-        if (gain > 0) {
+        const double decrease = at.cost - next->cost;
+        if (decrease > 0) {  // a gain above zero
           out.accepted = true;
-          const double ratio = 2 * gain - 1;
-          damping->lambda *= std::max(1.0 / 3.0, 1.0 - ratio * ratio * ratio);
+          // 2 gain - 1 and 1 - (2 gain - 1)^3, a multiply-add each.
+          const double ratio = std::fma(decrease, 2 * inv_predicted, -1.0);
+          damping->lambda *= std::max(1.0 / 3.0, std::fma(-ratio * ratio, ratio, 1.0));
           damping->growth = 2;
           break;
         }
