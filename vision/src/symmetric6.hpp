@@ -76,7 +76,12 @@ inline double symmetric3(const double m[6], int i, int j) {
 
 // The adjugate of a symmetric 3x3 matrix and its determinant, both from its
 // lower triangle (m00, m10, m11, m20, m21, m22); the adjugate by its lower
-// triangle too. The inverse is adj / det; false when it does not exist.
+// triangle too. The inverse is adj / det. False when the determinant is
+// outside 1e-200..1e200 in magnitude (zero and not finite included): for
+// entries of size s the determinant is about s^3, and Spd6 forms products
+// with the adjugate of about s^4 before it divides, which must stay well
+// inside double's normal range (1e-308..1e308) to keep their precision;
+// the caller then solves another way.
 struct Adjugate3 {
   double adj[6];
   double det;
@@ -91,7 +96,7 @@ inline bool adjugate3_symmetric(const double m[6], Adjugate3* out) {
   out->adj[4] = m10 * m20 - m00 * m21;
   out->adj[5] = m00 * m11 - m10 * m10;
   out->det = m00 * out->adj[0] + m10 * out->adj[1] + m20 * out->adj[3];
-  return std::abs(out->det) > 0 && std::isfinite(out->det);
+  return std::abs(out->det) >= 1e-200 && std::abs(out->det) <= 1e200;
 }
 
 // A symmetric positive-definite 6x6 system in 3x3 blocks (angles,
@@ -103,7 +108,7 @@ inline bool adjugate3_symmetric(const double m[6], Adjugate3* out) {
 // definite). Each determinant's division runs beside the products with its
 // adjugate, which are scaled by the reciprocal only once they are done: the
 // solve waits for two divisions, not for two inverses. `ok` is false when a
-// block is singular to rounding.
+// block is singular to rounding or its scale is extreme (adjugate3_symmetric).
 struct Spd6 {
   Adjugate3 a11, schur;  // of A11 and of S
   double inv_det11 = 0, inv_det_schur = 0;
