@@ -40,6 +40,16 @@ inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double m
          p.y() <= gray.rows - 1 - margin;
 }
 
+// The image halved for the candidate stage: cv::pyrDown(gray, *half), pixel
+// for pixel (tests/vision/detector_edge_map_test.cpp), in less time for
+// 8-bit grey images of at least 4x4 pixels (anything else goes to
+// cv::pyrDown). allow_avx2 = false keeps to the baseline instruction set
+// (the tests compare both).
+void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2 = true);
+
+// True when half_image runs its AVX2 loops on this CPU.
+bool half_image_uses_avx2();
+
 // Step 1's edge map of an 8-bit image: cv::Canny(image, *edges, canny_low,
 // canny_high, 3, false), bit for bit (tests/vision/detector_edge_map_test.cpp),
 // in less time.

@@ -71,13 +71,14 @@ std::vector<Quad> find_quad_candidates(const cv::Mat& gray, const DetectorParame
                                        DetectorStats* stats) {
   // Step 1: Canny's operator, whose first stage is a Gaussian smoothing of
   // the image (Canny 1986; cv::Canny itself starts at the Sobel gradient).
-  // With decimation, cv::pyrDown's 5x5 Gaussian is that stage, and the
-  // candidates are found at half resolution (a quarter of the pixels).
+  // With decimation, cv::pyrDown's 5x5 Gaussian is that stage (half_image:
+  // the same pixels), and the candidates are found at half resolution (a
+  // quarter of the pixels).
   cv::Mat edges;
   const int d = p.candidate_decimation;
   if (d == 2) {
     cv::Mat half;
-    cv::pyrDown(gray, half);
+    half_image(gray, &half);
     canny_edges(half, p, &edges);
   } else if (p.canny_sigma_px > 0) {
     const int k = 2 * static_cast<int>(std::ceil(2.5 * p.canny_sigma_px)) + 1;  // +-2.5 sigma
