@@ -12,6 +12,7 @@
 #include <tuple>
 
 #include "calibration_yaml.hpp"
+#include "lens_model.hpp"
 
 namespace vision {
 namespace {
@@ -376,38 +377,11 @@ Eigen::Vector2d Camera::project(const Eigen::Vector3d& p_cam) const {
 }
 
 Eigen::Vector2d Camera::distort_normalized(const Eigen::Vector2d& xy) const {
-  const auto& d = distortion_;
-  const double x = xy.x(), y = xy.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-  const double xd =
-      x * radial + 2 * d.p1 * x * y + d.p2 * (r2 + 2 * x * x) + r2 * (d.s1 + d.s2 * r2);
-  const double yd =
-      y * radial + d.p1 * (r2 + 2 * y * y) + 2 * d.p2 * x * y + r2 * (d.s3 + d.s4 * r2);
-  return {intrinsics_.fx * xd + intrinsics_.cx, intrinsics_.fy * yd + intrinsics_.cy};
+  return detail::distort_normalized(intrinsics_, distortion_, xy);
 }
 
 Eigen::Matrix2d Camera::distort_jacobian(const Eigen::Vector2d& xy) const {
-  const auto& d = distortion_;
-  const double x = xy.x(), y = xy.y();
-  const double r2 = x * x + y * y;
-  const double radial = 1 + r2 * (d.k1 + r2 * (d.k2 + r2 * d.k3));
-  // d(radial)/d(r2), and d(r2)/dx = 2x, d(r2)/dy = 2y.
-  const double dradial = d.k1 + r2 * (2 * d.k2 + 3 * d.k3 * r2);
-  Eigen::Matrix2d j;
-  j(0, 0) = radial + x * dradial * 2 * x + 2 * d.p1 * y + d.p2 * 6 * x;
-  j(0, 1) = x * dradial * 2 * y + 2 * d.p1 * x + d.p2 * 2 * y;
-  j(1, 0) = y * dradial * 2 * x + d.p1 * 2 * x + 2 * d.p2 * y;
-  j(1, 1) = radial + y * dradial * 2 * y + d.p1 * 6 * y + 2 * d.p2 * x;
-  // Thin prism: d(s r2 + s' r2^2)/dx = (s + 2 s' r2) 2x, likewise for y.
-  const double gx = d.s1 + 2 * d.s2 * r2, gy = d.s3 + 2 * d.s4 * r2;
-  j(0, 0) += gx * 2 * x;
-  j(0, 1) += gx * 2 * y;
-  j(1, 0) += gy * 2 * x;
-  j(1, 1) += gy * 2 * y;
-  j.row(0) *= intrinsics_.fx;
-  j.row(1) *= intrinsics_.fy;
-  return j;
+  return detail::distort_jacobian(intrinsics_, distortion_, xy);
 }
 
 bool Camera::undistort_point(const Eigen::Vector2d& pixel, Eigen::Vector2d* xy) const {

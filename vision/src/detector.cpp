@@ -9,6 +9,7 @@
 #include <string>
 
 #include "detector_internal.hpp"
+#include "lens_model.hpp"
 
 namespace vision {
 namespace {
@@ -90,7 +91,7 @@ std::optional<detail::Quad> inset_candidate(const detail::Quad& q, const Camera&
   for (int i = 0; i < 4; ++i) {
     const Eigen::Vector3d x = H * Eigen::Vector3d(uv[i].x(), uv[i].y(), 1);
     if (!(x.z() > 0)) return std::nullopt;
-    out[i] = camera.distort_normalized(x.head<2>() / x.z());
+    out[i] = detail::distort_normalized(camera, x.head<2>() / x.z());
   }
   return out;
 }

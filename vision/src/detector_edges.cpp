@@ -26,6 +26,7 @@
 #include <cstdint>
 
 #include "detector_internal.hpp"
+#include "lens_model.hpp"
 
 namespace vision::detail {
 namespace {
@@ -260,13 +261,13 @@ EdgeFitStatus sample_side(const cv::Mat& gray, const Camera& camera, const SideS
   // The corners themselves must lie inside, with the least window an edge
   // needs on either side (windows are cut where the image ends).
   for (const auto& c : {side.n0, side.n1})
-    if (!inside_image(gray, camera.distort_normalized(c), margin + p.min_edge_window_px))
+    if (!inside_image(gray, distort_normalized(camera, c), margin + p.min_edge_window_px))
       return EdgeFitStatus::kCutByImageBorder;
   samples->assign(side.m, Sample{});
   for (int k = 0; k < side.m; ++k) {
     const Eigen::Vector2d pn = side.point(k);
-    const Eigen::Vector2d px = camera.distort_normalized(pn);
-    const Eigen::Matrix2d j = camera.distort_jacobian(pn);
+    const Eigen::Vector2d px = distort_normalized(camera, pn);
+    const Eigen::Matrix2d j = distort_jacobian(camera, pn);
     const Eigen::Vector2d tangent = (j * side.dn).normalized();
     const Eigen::Vector2d normal(tangent.y(), -tangent.x());  // outward for a clockwise quad
     double inner = 0, outer = 0;
@@ -421,7 +422,7 @@ EdgeFit refine_quad(const cv::Mat& gray, const Camera& camera, const Quad& candi
         return fit;
       }
       fit.corners_norm[i] = x;
-      fit.corners_px[i] = camera.distort_normalized(x);
+      fit.corners_px[i] = distort_normalized(camera, x);
       if ((fit.corners_px[i] - candidate[i]).norm() > max_shift) {
         fit.status = EdgeFitStatus::kFitFailed;
         return fit;

@@ -11,6 +11,7 @@
 #include <algorithm>
 
 #include "detector_internal.hpp"
+#include "lens_model.hpp"
 
 namespace vision::detail {
 namespace {
@@ -24,7 +25,7 @@ class GridReader {
   bool pixel(double u, double v, Eigen::Vector2d* px) const {
     const Eigen::Vector3d x = H_ * Eigen::Vector3d(u, v, 1);
     if (!(x.z() > 0)) return false;
-    *px = camera_.distort_normalized(x.head<2>() / x.z());
+    *px = distort_normalized(camera_, x.head<2>() / x.z());
     return inside_image(gray_, *px, 0);
   }
 
