@@ -64,25 +64,45 @@ struct ImageSize {
 // runs at half resolution by default), and small and thin images.
 const ImageSize kSizes[] = {{368, 286}, {1224, 1024}, {37, 23}, {5, 5}, {3, 120}, {120, 3}};
 
+// Scenes (edges of every direction and strength, noise), pure noise (most
+// pixels above any threshold: the non-maximum test everywhere), flat images
+// and a vertical step of 6 grey levels (gradient 4 x 6 = 24 on its edge, so
+// that the thresholds 23.5 find it only when rounded down, as OpenCV does);
+// whole and fractional thresholds and swapped ones (OpenCV takes the larger
+// as high); both instruction sets.
 TEST(DetectorEdgeMap, CannyEdgesAreOpenCvCannyBitForBit) {
-  const std::pair<double, double> thresholds[] = {{25, 50}, {0, 0}, {10, 200}, {50, 50}};
+  const std::pair<double, double> thresholds[] = {{25, 50},     {0, 0},   {10, 200},
+                                                  {50, 50},     {60, 30}, {24.5, 50.7},
+                                                  {1000, 2000}, {-5, 3},  {23.5, 23.5}};
   unsigned seed = 1;
-  for (const ImageSize& size : kSizes) {
-    for (const auto& [low, high] : thresholds) {
-      const cv::Mat image = scene(size.cols, size.rows, seed++);
-      vision::DetectorParameters p;
-      p.canny_low = low;
-      p.canny_high = high;
-      cv::Mat ours, theirs;
-      vision::detail::canny_edges(image, p, &ours);
-      cv::Canny(image, theirs, low, high, 3, false);
-      ASSERT_EQ(ours.size(), theirs.size());
-      ASSERT_EQ(ours.type(), theirs.type());
-      EXPECT_EQ(pixels_that_differ(ours, theirs), 0)
-          << size.cols << "x" << size.rows << ", thresholds " << low << "/" << high;
-      // Not vacuous: the scenes have edges.
-      if (size.cols * size.rows > 1000) {
-        EXPECT_GT(cv::countNonZero(theirs), 0);
+  for (bool avx2 : {false, true}) {
+    for (const ImageSize& size : kSizes) {
+      cv::Mat noise(size.rows, size.cols, CV_8UC1);
+      cv::RNG(seed).fill(noise, cv::RNG::UNIFORM, 0, 256);
+      const cv::Mat flat(size.rows, size.cols, CV_8UC1, cv::Scalar(77));
+      cv::Mat step(size.rows, size.cols, CV_8UC1, cv::Scalar(100));
+      step.colRange(size.cols / 2, size.cols).setTo(106);
+      for (const auto& [low, high] : thresholds) {
+        const cv::Mat image = scene(size.cols, size.rows, seed++);
+        for (const cv::Mat& input : {image, noise, flat, step}) {
+          vision::DetectorParameters p;
+          p.canny_low = low;
+          p.canny_high = high;
+          cv::Mat ours, theirs;
+          vision::detail::canny_edges(input, p, &ours, avx2);
+          cv::Canny(input, theirs, low, high, 3, false);
+          ASSERT_EQ(ours.size(), theirs.size());
+          ASSERT_EQ(ours.type(), theirs.type());
+          EXPECT_EQ(pixels_that_differ(ours, theirs), 0)
+              << size.cols << "x" << size.rows << ", thresholds " << low << "/" << high
+              << (avx2 ? ", AVX2" : ", baseline");
+        }
+        // Not vacuous: the scenes have edges.
+        if (size.cols * size.rows > 1000 && high < 1000) {
+          cv::Mat theirs;
+          cv::Canny(image, theirs, low, high, 3, false);
+          EXPECT_GT(cv::countNonZero(theirs), 0);
+        }
       }
     }
   }
@@ -117,7 +137,7 @@ TEST(DetectorEdgeMap, HalfImageIsOpenCvPyrDownPixelForPixel) {
     }
   }
   // Not vacuous on this machine when it has AVX2: say which paths ran.
-  RecordProperty("avx2", vision::detail::half_image_uses_avx2() ? "yes" : "no");
+  RecordProperty("avx2", vision::detail::cpu_runs_avx2() ? "yes" : "no");
 }
 
 TEST(DetectorEdgeMap, ClosingGapsLeavesTheNonZeroPixelsOfBlurThenDilate) {

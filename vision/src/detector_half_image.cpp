@@ -112,7 +112,7 @@ __attribute__((target("avx2"))) VISION_HALF_INLINE_ALL void halve_avx2(const cv:
 
 }  // namespace
 
-bool half_image_uses_avx2() {
+bool cpu_runs_avx2() {
 #if defined(__x86_64__)
   static const bool avx2 = __builtin_cpu_supports("avx2");
   return avx2;
@@ -128,7 +128,7 @@ void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2) {
   }
   cv::Mat out((gray.rows + 1) / 2, (gray.cols + 1) / 2, CV_8UC1);
 #if defined(__x86_64__)
-  if (allow_avx2 && half_image_uses_avx2()) {
+  if (allow_avx2 && cpu_runs_avx2()) {
     halve_avx2(gray, &out);
     *half = out;
     return;

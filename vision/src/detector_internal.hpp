@@ -47,13 +47,15 @@ inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double m
 // (the tests compare both).
 void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2 = true);
 
-// True when half_image runs its AVX2 loops on this CPU.
-bool half_image_uses_avx2();
+// Step 1's edge map of an 8-bit grey image: cv::Canny(image, *edges,
+// canny_low, canny_high, 3, false), bit for bit (tests/vision/
+// detector_edge_map_test.cpp), in less time. allow_avx2 as half_image's.
+// Precondition: image is CV_8UC1 and not empty (cv::Exception otherwise).
+void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges,
+                 bool allow_avx2 = true);
 
-// Step 1's edge map of an 8-bit image: cv::Canny(image, *edges, canny_low,
-// canny_high, 3, false), bit for bit (tests/vision/detector_edge_map_test.cpp),
-// in less time.
-void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges);
+// True when this CPU runs the AVX2 loops of half_image and canny_edges.
+bool cpu_runs_avx2();
 
 // Steps 2-3 on the edge map of the image reduced `decimation` (1 or 2) times:
 // the smoothing (smoothing_kernel_px) and the dilation (dilation_kernel_px),

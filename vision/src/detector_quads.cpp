@@ -35,16 +35,6 @@ void make_clockwise(Quad* q) {
 
 }  // namespace
 
-void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges) {
-  // cv::Canny's first step is the 3x3 Sobel derivatives with
-  // BORDER_REPLICATE, which cv::spatialGradient computes in one pass over the
-  // image instead of two (a quarter less time for the whole of Canny on a
-  // half-resolution frame).
-  cv::Mat dx, dy;
-  cv::spatialGradient(image, dx, dy, 3, cv::BORDER_REPLICATE);
-  cv::Canny(dx, dy, *edges, p.canny_low, p.canny_high, false);
-}
-
 void close_edge_gaps(const DetectorParameters& p, int decimation, cv::Mat* edges) {
   // findContours sees only which pixels are non-zero, and a 3x3 Gaussian of
   // a 0/255 edge map is non-zero exactly on the kernel's footprint (its
