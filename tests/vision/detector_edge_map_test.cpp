@@ -62,7 +62,8 @@ struct ImageSize {
 };
 // Half of the paper's 736x571 and of a 5 MP GigE sensor (the candidate stage
 // runs at half resolution by default), and small and thin images.
-const ImageSize kSizes[] = {{368, 286}, {1224, 1024}, {37, 23}, {5, 5}, {3, 120}, {120, 3}};
+const ImageSize kSizes[] = {{368, 286}, {1224, 1024}, {37, 23}, {5, 5}, {3, 120},
+                            {120, 3},   {1, 1},       {1, 9},   {9, 1}};
 
 // Scenes (edges of every direction and strength, noise), pure noise (most
 // pixels above any threshold: the non-maximum test everywhere), flat images
