@@ -141,6 +141,35 @@ TEST(DetectorEdgeMap, HalfImageIsOpenCvPyrDownPixelForPixel) {
   RecordProperty("avx2", vision::detail::cpu_runs_avx2() ? "yes" : "no");
 }
 
+// Grey noise (every value, so a wrong maximum shows) and sparse 0/255 maps
+// (what the detector dilates), squares from 1 to larger than the smallest
+// images (the square cut at every border), in place and not; both
+// instruction sets.
+TEST(DetectorEdgeMap, DilateSquareIsOpenCvDilateValueForValue) {
+  unsigned seed = 300;
+  for (bool avx2 : {false, true}) {
+    for (const ImageSize& size : kSizes) {
+      cv::Mat noise(size.rows, size.cols, CV_8UC1);
+      cv::RNG(seed).fill(noise, cv::RNG::UNIFORM, 0, 256);
+      const cv::Mat sparse = sparse_edges(size.cols, size.rows, 0.05, seed++);
+      for (const cv::Mat& image : {noise, sparse}) {
+        for (int k : {1, 3, 5, 7, 11}) {
+          cv::Mat theirs, ours, in_place = image.clone();
+          cv::dilate(image, theirs, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+          vision::detail::dilate_square(image, k, &ours, avx2);
+          vision::detail::dilate_square(in_place, k, &in_place, avx2);
+          ASSERT_EQ(ours.size(), theirs.size());
+          EXPECT_EQ(pixels_that_differ(ours, theirs), 0)
+              << size.cols << "x" << size.rows << ", " << k << "x" << k
+              << (avx2 ? ", AVX2" : ", baseline");
+          EXPECT_EQ(pixels_that_differ(in_place, theirs), 0)
+              << "in place, " << size.cols << "x" << size.rows << ", " << k << "x" << k;
+        }
+      }
+    }
+  }
+}
+
 TEST(DetectorEdgeMap, ClosingGapsLeavesTheNonZeroPixelsOfBlurThenDilate) {
   unsigned seed = 100;
   for (const ImageSize& size : kSizes) {

@@ -193,21 +193,54 @@ inline void edge_map(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   }
 }
 
-#if defined(__GNUC__) && !defined(__clang__)
-#define VISION_EDGE_MAP_INLINE_ALL __attribute__((flatten))
-#else
-#define VISION_EDGE_MAP_INLINE_ALL
+// The largest value in the k x k square around every pixel, the square cut
+// where the image ends (cv::dilate's default border adds nothing to a
+// maximum): along each row (the row padded by r = k / 2 zeros each side,
+// which do not change a maximum of non-negative values), then down each
+// column of those row maxima.
+inline void dilate_rows(const cv::Mat& image, int k, cv::Mat* out) {
+  const int cols = image.cols, rows = image.rows, r = k / 2;
+  cv::Mat across(rows, cols, CV_8UC1);
+  std::vector<std::uint8_t> padded(static_cast<std::size_t>(cols + 2 * r), 0);
+  for (int i = 0; i < rows; ++i) {
+    std::memcpy(padded.data() + r, image.ptr<std::uint8_t>(i), static_cast<std::size_t>(cols));
+    std::uint8_t* __restrict a = across.ptr<std::uint8_t>(i);
+    const std::uint8_t* __restrict p = padded.data();
+    std::memcpy(a, p, static_cast<std::size_t>(cols));
+    for (int t = 1; t < k; ++t)
+      for (int j = 0; j < cols; ++j)
+        a[j] = std::max(a[j], p[j + t]);
+  }
+  out->create(rows, cols, CV_8UC1);
+  for (int i = 0; i < rows; ++i) {
+    std::uint8_t* __restrict o = out->ptr<std::uint8_t>(i);
+    const int first = std::max(i - r, 0), last = std::min(i + r, rows - 1);
+    std::memcpy(o, across.ptr<std::uint8_t>(first), static_cast<std::size_t>(cols));
+    for (int q = first + 1; q <= last; ++q) {
+      const std::uint8_t* __restrict a = across.ptr<std::uint8_t>(q);
+      for (int j = 0; j < cols; ++j)
+        o[j] = std::max(o[j], a[j]);
+    }
+  }
+}
+
+VISION_DETECTOR_INLINE_ALL void dilate_baseline(const cv::Mat& image, int k, cv::Mat* out) {
+  dilate_rows(image, k, out);
+}
+
+#if defined(VISION_DETECTOR_AVX2)
+VISION_DETECTOR_AVX2 void dilate_avx2(const cv::Mat& image, int k, cv::Mat* out) {
+  dilate_rows(image, k, out);
+}
 #endif
 
-VISION_EDGE_MAP_INLINE_ALL void edge_map_baseline(const cv::Mat& image, int low, int high,
+VISION_DETECTOR_INLINE_ALL void edge_map_baseline(const cv::Mat& image, int low, int high,
                                                   cv::Mat* edges) {
   edge_map(image, low, high, edges);
 }
 
-#if defined(__x86_64__)
-__attribute__((target("avx2"))) VISION_EDGE_MAP_INLINE_ALL void edge_map_avx2(const cv::Mat& image,
-                                                                              int low, int high,
-                                                                              cv::Mat* edges) {
+#if defined(VISION_DETECTOR_AVX2)
+VISION_DETECTOR_AVX2 void edge_map_avx2(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   edge_map(image, low, high, edges);
 }
 #endif
@@ -222,13 +255,27 @@ void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edg
   int low = static_cast<int>(std::floor(p.canny_low));
   int high = static_cast<int>(std::floor(p.canny_high));
   if (low > high) std::swap(low, high);
-#if defined(__x86_64__)
+#if defined(VISION_DETECTOR_AVX2)
   if (allow_avx2 && cpu_runs_avx2()) {
     edge_map_avx2(image, low, high, edges);
     return;
   }
 #endif
   edge_map_baseline(image, low, high, edges);
+}
+
+void dilate_square(const cv::Mat& image, int k, cv::Mat* dilated, bool allow_avx2) {
+  CV_Assert(image.type() == CV_8UC1 && !image.empty() && k >= 1 && k % 2 == 1);
+  cv::Mat out;  // not in place: the column pass reads rows the output replaces
+#if defined(VISION_DETECTOR_AVX2)
+  if (allow_avx2 && cpu_runs_avx2()) {
+    dilate_avx2(image, k, &out);
+    *dilated = out;
+    return;
+  }
+#endif
+  dilate_baseline(image, k, &out);
+  *dilated = out;
 }
 
 }  // namespace vision::detail

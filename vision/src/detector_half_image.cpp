@@ -93,19 +93,12 @@ inline void halve_rows(const cv::Mat& gray, cv::Mat* half) {
   }
 }
 
-#if defined(__GNUC__) && !defined(__clang__)
-#define VISION_HALF_INLINE_ALL __attribute__((flatten))
-#else
-#define VISION_HALF_INLINE_ALL
-#endif
-
-VISION_HALF_INLINE_ALL void halve_baseline(const cv::Mat& gray, cv::Mat* half) {
+VISION_DETECTOR_INLINE_ALL void halve_baseline(const cv::Mat& gray, cv::Mat* half) {
   halve_rows(gray, half);
 }
 
-#if defined(__x86_64__)
-__attribute__((target("avx2"))) VISION_HALF_INLINE_ALL void halve_avx2(const cv::Mat& gray,
-                                                                       cv::Mat* half) {
+#if defined(VISION_DETECTOR_AVX2)
+VISION_DETECTOR_AVX2 void halve_avx2(const cv::Mat& gray, cv::Mat* half) {
   halve_rows(gray, half);
 }
 #endif
@@ -127,7 +120,7 @@ void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2) {
     return;
   }
   cv::Mat out((gray.rows + 1) / 2, (gray.cols + 1) / 2, CV_8UC1);
-#if defined(__x86_64__)
+#if defined(VISION_DETECTOR_AVX2)
   if (allow_avx2 && cpu_runs_avx2()) {
     halve_avx2(gray, &out);
     *half = out;

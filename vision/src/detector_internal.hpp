@@ -40,6 +40,25 @@ inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double m
          p.y() <= gray.rows - 1 - margin;
 }
 
+// The candidate stage's pixel loops (half_image, canny_edges, dilate_square)
+// are plain element-wise loops that the compiler vectorizes. On x86-64 each
+// is compiled twice, for the baseline instruction set and for AVX2
+// (VISION_DETECTOR_AVX2), and cpu_runs_avx2() picks one at run time.
+// VISION_DETECTOR_INLINE_ALL marks the function that holds one build: GCC
+// then compiles everything it calls into it, for its instruction set (Clang
+// inlines them without being asked).
+#if defined(__GNUC__) && !defined(__clang__)
+#define VISION_DETECTOR_INLINE_ALL __attribute__((flatten))
+#else
+#define VISION_DETECTOR_INLINE_ALL
+#endif
+#if defined(__x86_64__)
+#define VISION_DETECTOR_AVX2 __attribute__((target("avx2"))) VISION_DETECTOR_INLINE_ALL
+#endif
+
+// True when this CPU runs the AVX2 builds of the candidate stage's loops.
+bool cpu_runs_avx2();
+
 // The image halved for the candidate stage: cv::pyrDown(gray, *half), pixel
 // for pixel (tests/vision/detector_edge_map_test.cpp), in less time for
 // 8-bit grey images of at least 4x4 pixels (anything else goes to
@@ -54,8 +73,11 @@ void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2 = true);
 void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edges,
                  bool allow_avx2 = true);
 
-// True when this CPU runs the AVX2 loops of half_image and canny_edges.
-bool cpu_runs_avx2();
+// cv::dilate(image, *dilated, a k x k MORPH_RECT), value for value
+// (tests/vision/detector_edge_map_test.cpp), in less time, for 8-bit grey
+// images. Precondition: k odd and >= 1, image CV_8UC1 and not empty
+// (cv::Exception otherwise). dilated may be image.
+void dilate_square(const cv::Mat& image, int k, cv::Mat* dilated, bool allow_avx2 = true);
 
 // Steps 2-3 on the edge map of the image reduced `decimation` (1 or 2) times:
 // the smoothing (smoothing_kernel_px) and the dilation (dilation_kernel_px),

@@ -48,12 +48,9 @@ void close_edge_gaps(const DetectorParameters& p, int decimation, cv::Mat* edges
   const int smooth = std::max(p.smoothing_kernel_px, 1), grow = std::max(p.dilation_kernel_px, 1);
   if (smooth > 3) {
     cv::GaussianBlur(*edges, *edges, cv::Size(scaled(smooth), scaled(smooth)), 0);
-    if (scaled(grow) > 1)
-      cv::dilate(*edges, *edges,
-                 cv::getStructuringElement(cv::MORPH_RECT, cv::Size(scaled(grow), scaled(grow))));
+    if (scaled(grow) > 1) dilate_square(*edges, scaled(grow), edges);
   } else if (scaled(smooth + grow - 1) > 1) {
-    const int k = scaled(smooth + grow - 1);
-    cv::dilate(*edges, *edges, cv::getStructuringElement(cv::MORPH_RECT, cv::Size(k, k)));
+    dilate_square(*edges, scaled(smooth + grow - 1), edges);
   }
 }
 
