@@ -45,18 +45,22 @@ struct GradientRow {
 
 // Sobel at every column of a row from its padded neighbours (up, centre,
 // down: cols + 2 pixels, column -1 first), then |dx| + |dy| and the test
-// against `low`. Every value fits 16 bits: |dx|, |dy| <= 4 x 255.
+// against `low`. The smoothing sums are shared between neighbouring columns:
+// dx[j] = across[j + 2] - across[j] with across = up + 2 centre + down,
+// dy[j] = rise[j] + 2 rise[j + 1] + rise[j + 2] with rise = down - up. Every
+// value fits 16 bits: |dx|, |dy| <= 4 x 255.
 inline void gradient_row(const std::uint8_t* __restrict up, const std::uint8_t* __restrict centre,
                          const std::uint8_t* __restrict down, int cols, std::int16_t low,
+                         std::int16_t* __restrict across, std::int16_t* __restrict rise,
                          std::int16_t* __restrict dx, std::int16_t* __restrict dy,
                          std::int16_t* __restrict magnitude, std::uint8_t* __restrict above_low) {
+  for (int j = 0; j < cols + 2; ++j) {
+    across[j] = static_cast<std::int16_t>(up[j] + 2 * centre[j] + down[j]);
+    rise[j] = static_cast<std::int16_t>(down[j] - up[j]);
+  }
   for (int j = 0; j < cols; ++j) {
-    const auto left = static_cast<std::int16_t>(up[j] + 2 * centre[j] + down[j]);
-    const auto right = static_cast<std::int16_t>(up[j + 2] + 2 * centre[j + 2] + down[j + 2]);
-    const auto top = static_cast<std::int16_t>(up[j] + 2 * up[j + 1] + up[j + 2]);
-    const auto bottom = static_cast<std::int16_t>(down[j] + 2 * down[j + 1] + down[j + 2]);
-    const auto gx = static_cast<std::int16_t>(right - left);
-    const auto gy = static_cast<std::int16_t>(bottom - top);
+    const auto gx = static_cast<std::int16_t>(across[j + 2] - across[j]);
+    const auto gy = static_cast<std::int16_t>(rise[j] + 2 * rise[j + 1] + rise[j + 2]);
     dx[j] = gx;
     dy[j] = gy;
     const auto m = static_cast<std::int16_t>((gx < 0 ? -gx : gx) + (gy < 0 ? -gy : gy));
@@ -159,6 +163,8 @@ inline void edge_map(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   std::uint8_t* padded[3] = {pixels.data(), pixels.data() + cols + 2,
                              pixels.data() + 2 * (cols + 2)};
   GradientRow ring[3] = {GradientRow(cols), GradientRow(cols), GradientRow(cols)};
+  std::vector<std::int16_t> across(static_cast<std::size_t>(cols + 2)),
+      rise(static_cast<std::size_t>(cols + 2));
   GradientRow* previous = &ring[0];  // row i - 1: magnitude 0 above the image
   GradientRow* centre = &ring[1];
   GradientRow* next = &ring[2];
@@ -167,8 +173,9 @@ inline void edge_map(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   padded_row(image, 0, padded[1]);
   padded_row(image, 1, padded[2]);
   const auto gradient = [&](GradientRow* g, int k) {  // the centre of padded[k]
-    gradient_row(padded[(k + 2) % 3], padded[k], padded[(k + 1) % 3], cols, low16, g->dx.data(),
-                 g->dy.data(), g->magnitude.data() + 1, g->above_low.data());
+    gradient_row(padded[(k + 2) % 3], padded[k], padded[(k + 1) % 3], cols, low16, across.data(),
+                 rise.data(), g->dx.data(), g->dy.data(), g->magnitude.data() + 1,
+                 g->above_low.data());
   };
   gradient(next, 1);  // row 0
   for (int i = 0; i < rows; ++i) {
