@@ -14,10 +14,12 @@
 //     perspective: a square tilted 40 degrees about its diagonal images as a
 //     rhombus of 75/105 degrees, and at 0.1 m the near side of a 5 cm square
 //     is up to 1.4 times longer than the far one.
-//  By default steps 1-7 run on the image halved by cv::pyrDown
-//  (DetectorParameters::candidate_decimation, as AprilTag's quad_decimate):
-//  they only have to find candidates, which everything below re-measures
-//  on the full image.
+//  By default steps 1-7 run on the image halved by cv::pyrDown's 5x5
+//  Gaussian (DetectorParameters::candidate_decimation, as AprilTag's
+//  quad_decimate). The halving and steps 1-3 give OpenCV's pyrDown, Canny
+//  and dilate pixel for pixel, from the detector's own faster loops
+//  (detector_half_image.cpp, detector_edge_map.cpp). Steps 1-7 only have to
+//  find candidates, which everything below re-measures on the full image.
 //  Then, beyond the paper (detector_edges.cpp):
 //  8. each side is re-located to sub-pixel precision from the image gradient
 //     along it. The side of a printed square is a straight line on the sheet
@@ -77,7 +79,7 @@ struct DetectorParameters {
   double canny_sigma_px = 0.8;
 
   // 1: the candidate steps 1-7 run on the full image. 2: on the image
-  // reduced by cv::pyrDown (whose 5x5 Gaussian then serves as Canny's
+  // reduced by cv::pyrDown's kernel (whose 5x5 Gaussian then serves as Canny's
   // smoothing stage instead of canny_sigma_px), like AprilTag's
   // quad_decimate: steps 1-7 take about a third of the time (bench_detector
   // times the whole detector; scripts/perf_table), and the sub-pixel sides and the code are still
