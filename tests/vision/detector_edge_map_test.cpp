@@ -72,9 +72,9 @@ const ImageSize kSizes[] = {{368, 286}, {1224, 1024}, {37, 23}, {5, 5}, {3, 120}
 // whole and fractional thresholds and swapped ones (OpenCV takes the larger
 // as high); both instruction sets.
 TEST(DetectorEdgeMap, CannyEdgesAreOpenCvCannyBitForBit) {
-  const std::pair<double, double> thresholds[] = {{25, 50},     {0, 0},   {10, 200},
-                                                  {50, 50},     {60, 30}, {24.5, 50.7},
-                                                  {1000, 2000}, {-5, 3},  {23.5, 23.5}};
+  const std::pair<double, double> thresholds[] = {
+      {25, 50},     {0, 0},       {10, 200}, {50, 50},     {60, 30},
+      {24.5, 50.7}, {1000, 2000}, {-5, 3},   {23.5, 23.5}, {5000, 1e6}};
   unsigned seed = 1;
   for (bool avx2 : {false, true}) {
     for (const ImageSize& size : kSizes) {
@@ -106,6 +106,21 @@ TEST(DetectorEdgeMap, CannyEdgesAreOpenCvCannyBitForBit) {
         }
       }
     }
+  }
+}
+
+// Thresholds beyond any int (which OpenCV would convert with undefined
+// behaviour) are above every gradient: no edges, on the noise image too.
+TEST(DetectorEdgeMap, CannyEdgesAreEmptyAboveTheLargestGradient) {
+  cv::Mat noise(286, 368, CV_8UC1);
+  cv::RNG(5).fill(noise, cv::RNG::UNIFORM, 0, 256);
+  vision::DetectorParameters p;
+  p.canny_low = 1e30;
+  p.canny_high = 1e40;
+  for (bool avx2 : {false, true}) {
+    cv::Mat ours;
+    vision::detail::canny_edges(noise, p, &ours, avx2);
+    EXPECT_EQ(cv::countNonZero(ours), 0);
   }
 }
 

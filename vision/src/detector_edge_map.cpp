@@ -1,5 +1,6 @@
 // Step 1's edge map: cv::Canny(image, edges, low, high, 3, false) bit for bit,
-// in one pass over the image instead of three.
+// with the derivatives computed row by row as the edge map reaches them
+// instead of into two images first.
 //
 // OpenCV computes the 3x3 Sobel derivatives into two 16-bit images, then
 // their L1 magnitude |dx| + |dy| row by row, keeps the pixels above the low
@@ -258,9 +259,11 @@ void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edg
                  bool allow_avx2) {
   CV_Assert(image.type() == CV_8UC1 && !image.empty());
   // OpenCV's thresholds for the L1 gradient: whole grey levels, rounded
-  // down, the larger one high.
-  int low = static_cast<int>(std::floor(p.canny_low));
-  int high = static_cast<int>(std::floor(p.canny_high));
+  // down, the larger one high. The magnitude lies in 0 .. 2040, so bounding
+  // them to +-2^20 changes nothing but keeps the conversion defined.
+  constexpr double kBound = 1 << 20;
+  int low = static_cast<int>(std::floor(std::clamp(p.canny_low, -kBound, kBound)));
+  int high = static_cast<int>(std::floor(std::clamp(p.canny_high, -kBound, kBound)));
   if (low > high) std::swap(low, high);
 #if defined(VISION_DETECTOR_AVX2)
   if (allow_avx2 && cpu_runs_avx2()) {
