@@ -232,23 +232,22 @@ inline void dilate_rows(const cv::Mat& image, int k, cv::Mat* out) {
   }
 }
 
-VISION_DETECTOR_INLINE_ALL void dilate_baseline(const cv::Mat& image, int k, cv::Mat* out) {
+VISION_INLINE_ALL void dilate_baseline(const cv::Mat& image, int k, cv::Mat* out) {
   dilate_rows(image, k, out);
 }
 
-#if defined(VISION_DETECTOR_AVX2)
-VISION_DETECTOR_AVX2 void dilate_avx2(const cv::Mat& image, int k, cv::Mat* out) {
+#if defined(VISION_AVX2)
+VISION_AVX2 void dilate_avx2(const cv::Mat& image, int k, cv::Mat* out) {
   dilate_rows(image, k, out);
 }
 #endif
 
-VISION_DETECTOR_INLINE_ALL void edge_map_baseline(const cv::Mat& image, int low, int high,
-                                                  cv::Mat* edges) {
+VISION_INLINE_ALL void edge_map_baseline(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   edge_map(image, low, high, edges);
 }
 
-#if defined(VISION_DETECTOR_AVX2)
-VISION_DETECTOR_AVX2 void edge_map_avx2(const cv::Mat& image, int low, int high, cv::Mat* edges) {
+#if defined(VISION_AVX2)
+VISION_AVX2 void edge_map_avx2(const cv::Mat& image, int low, int high, cv::Mat* edges) {
   edge_map(image, low, high, edges);
 }
 #endif
@@ -265,8 +264,8 @@ void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edg
   int low = static_cast<int>(std::floor(std::clamp(p.canny_low, -kBound, kBound)));
   int high = static_cast<int>(std::floor(std::clamp(p.canny_high, -kBound, kBound)));
   if (low > high) std::swap(low, high);
-#if defined(VISION_DETECTOR_AVX2)
-  if (allow_avx2 && cpu_runs_avx2()) {
+#if defined(VISION_AVX2)
+  if (allow_avx2 && cpu_has_avx2()) {
     edge_map_avx2(image, low, high, edges);
     return;
   }
@@ -277,8 +276,8 @@ void canny_edges(const cv::Mat& image, const DetectorParameters& p, cv::Mat* edg
 void dilate_square(const cv::Mat& image, int k, cv::Mat* dilated, bool allow_avx2) {
   CV_Assert(image.type() == CV_8UC1 && !image.empty() && k >= 1 && k % 2 == 1);
   cv::Mat out;  // not in place: the column pass reads rows the output replaces
-#if defined(VISION_DETECTOR_AVX2)
-  if (allow_avx2 && cpu_runs_avx2()) {
+#if defined(VISION_AVX2)
+  if (allow_avx2 && cpu_has_avx2()) {
     dilate_avx2(image, k, &out);
     *dilated = out;
     return;

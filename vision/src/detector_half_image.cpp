@@ -93,26 +93,17 @@ inline void halve_rows(const cv::Mat& gray, cv::Mat* half) {
   }
 }
 
-VISION_DETECTOR_INLINE_ALL void halve_baseline(const cv::Mat& gray, cv::Mat* half) {
+VISION_INLINE_ALL void halve_baseline(const cv::Mat& gray, cv::Mat* half) {
   halve_rows(gray, half);
 }
 
-#if defined(VISION_DETECTOR_AVX2)
-VISION_DETECTOR_AVX2 void halve_avx2(const cv::Mat& gray, cv::Mat* half) {
+#if defined(VISION_AVX2)
+VISION_AVX2 void halve_avx2(const cv::Mat& gray, cv::Mat* half) {
   halve_rows(gray, half);
 }
 #endif
 
 }  // namespace
-
-bool cpu_runs_avx2() {
-#if defined(__x86_64__)
-  static const bool avx2 = __builtin_cpu_supports("avx2");
-  return avx2;
-#else
-  return false;
-#endif
-}
 
 void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2) {
   if (gray.type() != CV_8UC1 || gray.cols < 4 || gray.rows < 4) {
@@ -120,8 +111,8 @@ void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2) {
     return;
   }
   cv::Mat out((gray.rows + 1) / 2, (gray.cols + 1) / 2, CV_8UC1);
-#if defined(VISION_DETECTOR_AVX2)
-  if (allow_avx2 && cpu_runs_avx2()) {
+#if defined(VISION_AVX2)
+  if (allow_avx2 && cpu_has_avx2()) {
     halve_avx2(gray, &out);
     *half = out;
     return;

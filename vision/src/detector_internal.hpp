@@ -11,6 +11,7 @@
 #include <optional>
 #include <vector>
 
+#include "cpu_builds.hpp"
 #include "vision/camera.hpp"
 #include "vision/codebook.hpp"
 #include "vision/detector.hpp"
@@ -41,29 +42,14 @@ inline bool inside_image(const cv::Mat& gray, const Eigen::Vector2d& p, double m
 }
 
 // The candidate stage's pixel loops (half_image, canny_edges, dilate_square)
-// are plain element-wise loops that the compiler vectorizes. On x86-64 each
-// is compiled twice, for the baseline instruction set and for AVX2
-// (VISION_DETECTOR_AVX2), and cpu_runs_avx2() picks one at run time.
-// VISION_DETECTOR_INLINE_ALL marks the function that holds one build: GCC
-// then compiles everything it calls into it, for its instruction set (Clang
-// inlines them without being asked).
-#if defined(__GNUC__) && !defined(__clang__)
-#define VISION_DETECTOR_INLINE_ALL __attribute__((flatten))
-#else
-#define VISION_DETECTOR_INLINE_ALL
-#endif
-#if defined(__x86_64__)
-#define VISION_DETECTOR_AVX2 __attribute__((target("avx2"))) VISION_DETECTOR_INLINE_ALL
-#endif
-
-// True when this CPU runs the AVX2 builds of the candidate stage's loops.
-bool cpu_runs_avx2();
+// are plain element-wise loops that the compiler vectorizes, built for the
+// baseline instruction set and for AVX2 (cpu_builds.hpp); allow_avx2 = false
+// keeps to the baseline one.
 
 // The image halved for the candidate stage: cv::pyrDown(gray, *half), pixel
 // for pixel (tests/vision/detector_edge_map_test.cpp), in less time for
 // 8-bit grey images of at least 4x4 pixels (anything else goes to
-// cv::pyrDown). allow_avx2 = false keeps to the baseline instruction set
-// (the tests compare both).
+// cv::pyrDown).
 void half_image(const cv::Mat& gray, cv::Mat* half, bool allow_avx2 = true);
 
 // Step 1's edge map of an 8-bit grey image: cv::Canny(image, *edges,

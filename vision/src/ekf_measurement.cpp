@@ -178,9 +178,9 @@ bool measure_baseline(const EkfPoints& points, const Vector6d& x, const EulerTri
   return measure(points, x, trig, out);
 }
 
-#if defined(VISION_EKF_AVX2_FMA)
-VISION_EKF_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x,
-                                          const EulerTrig& trig, MeasurementSums* out) {
+#if defined(VISION_AVX2_FMA)
+VISION_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x,
+                                      const EulerTrig& trig, MeasurementSums* out) {
   return measure(points, x, trig, out);
 }
 #endif
@@ -188,7 +188,7 @@ VISION_EKF_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6
 }  // namespace
 
 EkfMeasurement ekf_measurement(EkfInstructionSet set) {
-#if defined(VISION_EKF_AVX2_FMA)
+#if defined(VISION_AVX2_FMA)
   if (set == EkfInstructionSet::kAvx2Fma) return measure_avx2_fma;
 #endif
   (void)set;
@@ -208,11 +208,7 @@ namespace vision {
 
 bool cpu_runs(EkfInstructionSet set) {
   if (set == EkfInstructionSet::kBaseline) return true;
-#if defined(VISION_EKF_AVX2_FMA)
-  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-#else
-  return false;
-#endif
+  return detail::cpu_has_avx2_fma();
 }
 
 }  // namespace vision

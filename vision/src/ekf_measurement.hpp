@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "cpu_builds.hpp"
 #include "symmetric6.hpp"
 #include "vision/correspondences.hpp"
 #include "vision/pose_ekf.hpp"
@@ -24,17 +25,6 @@ struct EulerTrig {
 // target has it). Aligned as a double, so that no allocator or stack frame
 // has to provide 32 bytes (unaligned AVX loads cost nothing on aligned data).
 typedef double Lanes __attribute__((vector_size(32), aligned(8)));
-
-// GCC compiles everything a loop marked VISION_EKF_INLINE_ALL calls into it,
-// for that loop's instruction set (Clang inlines them without being asked).
-#if defined(__GNUC__) && !defined(__clang__)
-#define VISION_EKF_INLINE_ALL __attribute__((flatten))
-#else
-#define VISION_EKF_INLINE_ALL
-#endif
-#if defined(__x86_64__)
-#define VISION_EKF_AVX2_FMA __attribute__((target("avx2,fma"))) VISION_EKF_INLINE_ALL
-#endif
 
 // The correspondences in blocks of four points (structure of arrays): the
 // layout the measurement reads. The last block is padded with copies of the

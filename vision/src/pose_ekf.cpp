@@ -272,21 +272,21 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
 
 // run_updates built for each instruction set, with everything it calls but
 // the measurement compiled into it.
-VISION_EKF_INLINE_ALL Updates run_updates_baseline(const MapCost& map, const EkfOptions& options,
-                                                   Linearisation* at, Linearisation* next) {
+VISION_INLINE_ALL Updates run_updates_baseline(const MapCost& map, const EkfOptions& options,
+                                               Linearisation* at, Linearisation* next) {
   return run_updates(map, options, at, next);
 }
 
-#if defined(VISION_EKF_AVX2_FMA)
-VISION_EKF_AVX2_FMA Updates run_updates_avx2_fma(const MapCost& map, const EkfOptions& options,
-                                                 Linearisation* at, Linearisation* next) {
+#if defined(VISION_AVX2_FMA)
+VISION_AVX2_FMA Updates run_updates_avx2_fma(const MapCost& map, const EkfOptions& options,
+                                             Linearisation* at, Linearisation* next) {
   return run_updates(map, options, at, next);
 }
 #endif
 
 Updates run_updates(EkfInstructionSet set, const MapCost& map, const EkfOptions& options,
                     Linearisation* at, Linearisation* next) {
-#if defined(VISION_EKF_AVX2_FMA)
+#if defined(VISION_AVX2_FMA)
   if (set == EkfInstructionSet::kAvx2Fma) return run_updates_avx2_fma(map, options, at, next);
 #endif
   (void)set;
