@@ -1,14 +1,15 @@
 // The candidate stage of the detector (vision/src/detector_quads.cpp) computes
-// three of its steps in less time than their textbook form and promises the
-// same result: its halved image is cv::pyrDown's pixel for pixel
-// (vision/src/detector_half_image.cpp), its edge map is cv::Canny's bit for
-// bit, and its smoothing
+// its steps in less time than their textbook form and promises the same
+// result: its halved image is cv::pyrDown's pixel for pixel
+// (vision/src/detector_half_image.cpp), its edge map cv::Canny's and its
+// dilation cv::dilate's (vision/src/detector_edge_map.cpp), and its smoothing
 // and dilation of the edge map leave non-zero exactly the pixels that
 // cv::GaussianBlur then cv::dilate leave non-zero. findContours reads nothing
-// else, so the candidates are the textbook pipeline's. Both promises rest on
-// OpenCV's internals (Canny's Sobel step and border, the fixed-point 3x3
-// Gaussian's smallest weight), which is why they are checked here and not
-// only argued. Every image is seeded: the tests are deterministic.
+// else, so the candidates are the textbook pipeline's. The promises rest on
+// OpenCV's internals (pyrDown's integer kernel and border, Canny's Sobel step,
+// border, fixed-point direction test and thresholds, the 3x3 Gaussian's
+// smallest weight), which is why they are checked here and not only argued.
+// Every image is seeded: the tests are deterministic.
 #include <gtest/gtest.h>
 
 #include <opencv2/imgproc.hpp>
@@ -127,8 +128,9 @@ TEST(DetectorEdgeMap, CannyEdgesAreEmptyAboveTheLargestGradient) {
 // Every pixel value, every border case: noise images (each pixel independent
 // and uniform over 0..255, so every sum of the kernel's range occurs) and
 // all-white ones (the largest sums, 16 x 16 x 255), at even and odd widths
-// and heights, from the 4x4 the fast path takes to a 5 MP sensor, and a view
-// into a larger image (rows not contiguous); both instruction sets.
+// and heights, from the 4x4 the fast path takes (smaller ones go to
+// cv::pyrDown itself) to a 5 MP sensor, and a view into a larger image (rows
+// not contiguous); both instruction sets.
 TEST(DetectorEdgeMap, HalfImageIsOpenCvPyrDownPixelForPixel) {
   const ImageSize sizes[] = {{736, 571}, {2448, 2048}, {737, 572}, {4, 4}, {5, 4}, {4, 5},
                              {6, 7},     {7, 6},       {33, 17},   {3, 9}, {9, 3}};
