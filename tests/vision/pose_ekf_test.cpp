@@ -9,11 +9,27 @@
 
 #include <cmath>
 #include <random>
+#include <utility>
 
 #include "synthetic_pose.hpp"
 #include "vision/correspondences.hpp"
 
 namespace {
+
+// A problem of bench_solvers' kind with 0.5 px corner noise, drawn from
+// `rng` (which the caller may go on drawing from), and its correspondences.
+struct NoisyProblem {
+  rig_test::Problem problem;
+  vision::Correspondences corners;
+};
+NoisyProblem noisy_problem(const vision::Camera& camera, std::mt19937_64& rng) {
+  rig_test::ProblemSpec spec;
+  spec.noise_px = 0.5;
+  rig_test::Problem p = rig_test::draw_problem(camera, spec, rng);
+  vision::Correspondences c =
+      vision::make_correspondences(camera, p.object_points, p.image_points_px);
+  return {std::move(p), std::move(c)};
+}
 
 TEST(EkfSolver, CarriedStateAveragesTheFramesOfOnePosition) {
   const vision::Camera camera = vision::Camera::paper_default();
@@ -57,11 +73,8 @@ TEST(EkfSolver, CarriedStateAveragesTheFramesOfOnePosition) {
 
 TEST(EkfSolver, CarriedCovarianceShrinksFrameByFrame) {
   const vision::Camera camera = vision::Camera::paper_default();
-  rig_test::ProblemSpec spec;
-  spec.noise_px = 0.5;
   std::mt19937_64 rng(5);
-  const auto p = rig_test::draw_problem(camera, spec, rng);
-  const auto c = vision::make_correspondences(camera, p.object_points, p.image_points_px);
+  const auto [p, c] = noisy_problem(camera, rng);
   const vision::HybridEkfSolver solver;
   vision::SolverHint hint;
   double previous = std::numeric_limits<double>::infinity();
@@ -89,11 +102,8 @@ TEST(EkfSolver, CarriedCovarianceShrinksFrameByFrame) {
 // by 1e-6 to 1 instead. Fixed seed.
 TEST(IteratedEkf, TightPriorsOfAnyScaleComeBackAsThePosterior) {
   const vision::Camera camera = vision::Camera::paper_default();
-  rig_test::ProblemSpec spec;
-  spec.noise_px = 0.5;
   std::mt19937_64 rng(3);
-  const auto p = rig_test::draw_problem(camera, spec, rng);
-  const auto c = vision::make_correspondences(camera, p.object_points, p.image_points_px);
+  const auto [p, c] = noisy_problem(camera, rng);
   std::normal_distribution<double> normal;
   vision::Matrix6d B;
   for (int i = 0; i < 6; ++i)
