@@ -106,6 +106,20 @@ void pack(const std::vector<uint16_t>& v, ArvPixelFormat format, int bits, uint8
   }
 }
 
+// The render seed of a carriage position (whole µm): `seed` mixed with
+// both coordinates (SplitMix64's finalizer, so neighbouring positions draw
+// unrelated noise).
+uint64_t position_seed(uint64_t seed, double x_mm, double y_mm) {
+  uint64_t z = seed;
+  for (const double mm : {x_mm, y_mm}) {
+    z += 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::llround(mm * 1000));
+    z = (z ^ (z >> 30u)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27u)) * 0x94D049BB133111EBull;
+    z ^= z >> 31u;
+  }
+  return z;
+}
+
 }  // namespace
 
 struct CameraServer::Impl {
@@ -140,7 +154,8 @@ struct CameraServer::Impl {
       std::tie(x1, y1) = server->position_();
     }
     const uint64_t frame_id = arv_buffer_get_frame_id(buffer);
-    const uint64_t seed = options.seed + frame_id;
+    const uint64_t seed =
+        options.seed_by_position ? position_seed(options.seed, x0, y0) : options.seed + frame_id;
     const vision::Pose T0 = pose_at(x0, y0);
     // A carriage that moved less than 1 µm during the exposure is static: the
     // blur would be far below a pixel and render() is several times cheaper.

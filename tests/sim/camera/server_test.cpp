@@ -18,6 +18,7 @@
 #include <mutex>
 #include <opencv2/core.hpp>
 #include <thread>
+#include <vector>
 
 #include "camera_frames.hpp"
 #include "sim/camera/config.hpp"
@@ -102,6 +103,38 @@ TEST_F(SimCamera, TriggeredFrameIsTheRenderOfTheBenchPosition) {
   const vision::CaptureCounters c = source.counters();
   EXPECT_EQ(c.delivered, 2u);
   EXPECT_EQ(c.lost, 0u);
+}
+
+// Noise drawn per position: the frame id no longer enters the seed, so a
+// frame taken again at a position (as after an incomplete one) is the same
+// image, and another position draws other noise.
+TEST_F(SimCamera, NoiseDrawnPerPositionRepeatsAtAPositionWhateverTheFrameId) {
+  sim::camera::CameraServerOptions options;
+  options.real_time_exposure = false;
+  options.seed_by_position = true;
+  start(options);
+  vision::GigeSource source(server_->address());
+  source.open();
+  std::vector<cv::Mat> frames;
+  std::vector<sim::camera::CameraServer::Exposure> exposures;
+  for (const double x : {100.0, 100.0, 400.0, 100.0}) {
+    bench_.set(x, 150);
+    source.trigger();
+    frames.push_back(source.grab(kFrameWait).image);
+    exposures.push_back(server_->last_exposure());
+  }
+  EXPECT_NE(exposures[0].frame_id, exposures[1].frame_id);
+  EXPECT_EQ(exposures[1].seed, exposures[0].seed);
+  EXPECT_EQ(exposures[3].seed, exposures[0].seed);
+  EXPECT_NE(exposures[2].seed, exposures[0].seed);
+  EXPECT_EQ(differing_pixels(frames[1], frames[0]), 0);
+  EXPECT_EQ(differing_pixels(frames[3], frames[0]), 0);
+  EXPECT_EQ(differing_pixels(frames[2], expected(400, 150, exposures[2].seed)), 0);
+  // One micrometre along y is another position: other draws.
+  bench_.set(100, 150.001);
+  source.trigger();
+  source.grab(kFrameWait);
+  EXPECT_NE(server_->last_exposure().seed, exposures[0].seed);
 }
 
 TEST_F(SimCamera, FrameExposedWhileTheBenchMovesIsBlurredAlongTheMove) {

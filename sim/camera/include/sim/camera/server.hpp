@@ -84,6 +84,14 @@ struct CameraServerOptions {
   bool real_time_exposure = true;
   // Render noise seed: frame k uses seed + k, so a frame can be re-rendered.
   uint64_t seed = 1;
+  // Noise draws per position instead: a frame's render seed is seed mixed
+  // with the carriage position at the start of its exposure (whole µm), the
+  // same at the same position whatever the frame id. A frame triggered again
+  // (an incomplete one on a loaded host) then shifts no later frame's noise,
+  // so two runs over the same positions (one pixel format against another)
+  // see the same draws. Repeated frames at one position are identical: not
+  // for sweeps that average frames.
+  bool seed_by_position = false;
   // The GigE Vision bootstrap strings the camera announces itself with
   // (GenICam DeviceVendorName, DeviceModelName, DeviceVersion; < 32
   // characters each): a simulated camera says so, and which realism profile
