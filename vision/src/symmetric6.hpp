@@ -161,14 +161,23 @@ struct Spd6 {
   double adj_schur(int i, int j) const { return symmetric3(schur.adj, i, j); }
 };
 
+// A^-1 b by Eigen's pivoting LDLT, for systems whose blocks Spd6 cannot
+// invert. Rare: kept out of line, so that the loops calling solve_spd stay
+// small.
+[[gnu::noinline, gnu::cold]] inline Vector6d solve_spd_pivoting(const Symmetric6& A,
+                                                                const Vector6d& b,
+                                                                double diagonal_scale) {
+  Matrix6d scaled = full_matrix(A);
+  scaled.diagonal() *= diagonal_scale;
+  return scaled.ldlt().solve(b);
+}
+
 // A^-1 b for the symmetric positive-definite A, its diagonal multiplied by
 // `diagonal_scale` (Eigen's pivoting LDLT when a pivot fails).
 inline Vector6d solve_spd(const Symmetric6& A, const Vector6d& b, double diagonal_scale = 1.0) {
   const Spd6 factors(A, diagonal_scale);
   if (factors.ok) return factors.solve(b);
-  Matrix6d scaled = full_matrix(A);
-  scaled.diagonal() *= diagonal_scale;
-  return scaled.ldlt().solve(b);
+  return solve_spd_pivoting(A, b, diagonal_scale);
 }
 
 // A^-1 of the symmetric positive-definite A, column by column.
