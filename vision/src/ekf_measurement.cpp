@@ -65,61 +65,46 @@ static_assert(kTerms % 4 == 0 && kTerms * sizeof(double) == sizeof(MeasurementSu
               "the terms are MeasurementSums, in four-lane groups");
 static_assert(kTT22 == lower_index(5, 5) && kG0 == 21, "H^T H first, by lower_index");
 
-// The projection at a state: its rotation R = Rz(psi) Ry(theta) Rx(phi) by
-// the products of Ry Rx (m) and R (r) that the measurement uses, its
-// translation and the focal lengths.
-struct Projection {
-  double sz, cz;                                  // psi
-  double m00, m01, m02, m11, m12, m20, m21, m22;  // Ry Rx (m10 = 0)
-  double r01, r02, r11, r12, r21, r22;            // columns 1 and 2 of R
-  double tx, ty, tz;                              // translation, m
-
-  Projection(const Vector6d& x, const EulerTrig& trig)
-      : sz(trig.s[0]), cz(trig.c[0]), tx(x(3)), ty(x(4)), tz(x(5)) {
-    const double sy = trig.s[1], cy = trig.c[1], sx = trig.s[2], cx = trig.c[2];
-    m00 = cy;
-    m01 = sy * sx;
-    m02 = sy * cx;
-    m11 = cx;
-    m12 = -sx;
-    m20 = -sy;
-    m21 = cy * sx;
-    m22 = cy * cx;
-    r01 = cz * m01 - sz * m11;
-    r02 = cz * m02 - sz * m12;
-    r11 = sz * m01 + cz * m11;
-    r12 = sz * m02 + cz * m12;
-    r21 = m21;
-    r22 = m22;
-  }
-};
-
-// One block's terms, lane by lane, into t[kTerms]; false when a point of it is
-// on or behind the camera. With Q = Ry Rx P: dR/dpsi P = e_z x (R P) =
-// (-(RP)_y, (RP)_x, 0), dR/dtheta P = Rz (e_y x Q) = (cos psi Q_z, sin psi
-// Q_z, -Q_x), dR/dphi P = R (e_x x P) = R (0, -P_z, P_y). The two rows of
-// dh/dp are fx/z (1, 0, -u) and fy/z (0, 1, -v) (u, v the projected point),
-// so the translation columns of H are those rows themselves, and every entry
-// of H^T H that involves them is a rotation column scaled by fx/z or fy/z, or
-// a sum of squares.
-inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t) {
-  const Lanes Qx = r.m00 * p.X + r.m01 * p.Y + r.m02 * p.Z;
+// One block projected at state r: its projected points and residuals, and
+// |r|^2 lane by lane into *residual; false when a point of it is on or behind
+// the camera.
+inline bool project_block(const EkfPoints::Block& p, const Projection& r, ProjectedBlock* q,
+                          Lanes* residual) {
+  q->Qx = r.m00 * p.X + r.m01 * p.Y + r.m02 * p.Z;
   const Lanes Qy = r.m11 * p.Y + r.m12 * p.Z;
-  const Lanes Qz = r.m20 * p.X + r.m21 * p.Y + r.m22 * p.Z;
-  const Lanes RPx = r.cz * Qx - r.sz * Qy, RPy = r.sz * Qx + r.cz * Qy;
-  const Lanes pz = Qz + r.tz;
+  q->Qz = r.m20 * p.X + r.m21 * p.Y + r.m22 * p.Z;
+  q->RPx = r.cz * q->Qx - r.sz * Qy;
+  q->RPy = r.sz * q->Qx + r.cz * Qy;
+  const Lanes pz = q->Qz + r.tz;
   const LaneMask in_front = (pz > 0) | (p.weight == 0);
   if (!(in_front[0] && in_front[1] && in_front[2] && in_front[3])) return false;
   const Lanes inv_z = 1.0 / pz;
-  const Lanes u = (RPx + r.tx) * inv_z, v = (RPy + r.ty) * inv_z;
+  q->u = (q->RPx + r.tx) * inv_z;
+  q->v = (q->RPy + r.ty) * inv_z;
   // Observed minus predicted pixel; padding lanes weigh nothing.
-  const Lanes ax = inv_z * p.fx_weight, by = inv_z * p.fy_weight;
-  const Lanes e0 = (p.nx - u) * p.fx_weight, e1 = (p.ny - v) * p.fy_weight;
+  q->ax = inv_z * p.fx_weight;
+  q->by = inv_z * p.fy_weight;
+  q->e0 = (p.nx - q->u) * p.fx_weight;
+  q->e1 = (p.ny - q->v) * p.fy_weight;
+  *residual = q->e0 * q->e0 + q->e1 * q->e1;
+  return true;
+}
+
+// One projected block's terms, lane by lane, into t[kTerms]. With Q = Ry Rx
+// P: dR/dpsi P = e_z x (R P) = (-(RP)_y, (RP)_x, 0), dR/dtheta P = Rz (e_y x
+// Q) = (cos psi Q_z, sin psi Q_z, -Q_x), dR/dphi P = R (e_x x P) = R (0,
+// -P_z, P_y). The two rows of dh/dp are fx/z (1, 0, -u) and fy/z (0, 1, -v)
+// (u, v the projected point), so the translation columns of H are those rows
+// themselves, and every entry of H^T H that involves them is a rotation
+// column scaled by fx/z or fy/z, or a sum of squares.
+inline void block_terms(const EkfPoints::Block& p, const Projection& r, const ProjectedBlock& q,
+                        Lanes* t) {
+  const Lanes &ax = q.ax, &by = q.by, &u = q.u, &v = q.v, &e0 = q.e0, &e1 = q.e1;
   const Lanes dphi_x = r.r02 * p.Y - r.r01 * p.Z, dphi_y = r.r12 * p.Y - r.r11 * p.Z,
               dphi_z = r.r22 * p.Y - r.r21 * p.Z;
   // The rotation columns of the two rows of H, pixels per radian.
-  const Lanes a0 = -ax * RPy, a1 = ax * (r.cz * Qz + u * Qx), a2 = ax * (dphi_x - u * dphi_z);
-  const Lanes b0 = by * RPx, b1 = by * (r.sz * Qz + v * Qx), b2 = by * (dphi_y - v * dphi_z);
+  const Lanes a0 = -ax * q.RPy, a1 = ax * (r.cz * q.Qz + u * q.Qx), a2 = ax * (dphi_x - u * dphi_z);
+  const Lanes b0 = by * q.RPx, b1 = by * (r.sz * q.Qz + v * q.Qx), b2 = by * (dphi_y - v * dphi_z);
   const Lanes axu = ax * u, byv = by * v;
   t[kRR00] = a0 * a0 + b0 * b0;
   t[kRR11] = a1 * a1 + b1 * b1;
@@ -149,19 +134,32 @@ inline bool block_terms(const EkfPoints::Block& p, const Projection& r, Lanes* t
   t[kG4] = e1 * by;
   t[kG5] = -(e0 * axu + e1 * byv);
   t[kTT10] = Lanes{};
+}
+
+// The measurement's two steps (vision/src/ekf_measurement.hpp), built for
+// whichever instruction set their caller is.
+inline bool project(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
+                    EkfProjection* out) {
+  out->rotation = Projection(x, trig);
+  Lanes residual;
+  if (!project_block(points.blocks[0], out->rotation, &out->blocks[0], &residual)) return false;
+  for (size_t b = 1; b < points.blocks.size(); ++b) {
+    Lanes more;
+    if (!project_block(points.blocks[b], out->rotation, &out->blocks[b], &more)) return false;
+    residual += more;
+  }
+  // The lanes summed as sums_of sums them: (0 + 1) + (2 + 3).
+  out->residual_squared = (residual[0] + residual[1]) + (residual[2] + residual[3]);
   return true;
 }
 
-// The measurement (vision/src/ekf_measurement.hpp), built for whichever
-// instruction set its caller is.
-inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                    MeasurementSums* out) {
-  const Projection r(x, trig);
+inline void measurement_sums(const EkfPoints& points, const EkfProjection& projection,
+                             MeasurementSums* out) {
   Lanes t[kTerms];
-  if (!block_terms(points.blocks[0], r, t)) return false;
+  block_terms(points.blocks[0], projection.rotation, projection.blocks[0], t);
   for (size_t b = 1; b < points.blocks.size(); ++b) {
     Lanes more[kTerms];
-    if (!block_terms(points.blocks[b], r, more)) return false;
+    block_terms(points.blocks[b], projection.rotation, projection.blocks[b], more);
     for (int k = 0; k < kTerms; ++k)
       t[k] += more[k];
   }
@@ -170,18 +168,24 @@ inline bool measure(const EkfPoints& points, const Vector6d& x, const EulerTrig&
   for (int k = 0; k < kTerms / 4; ++k)
     sums_of(t[4 * k], t[4 * k + 1], t[4 * k + 2], t[4 * k + 3], &sums[k]);
   std::memcpy(out, sums, sizeof(MeasurementSums));
-  return true;
 }
 
-bool measure_baseline(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                      MeasurementSums* out) {
-  return measure(points, x, trig, out);
+bool project_baseline(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
+                      EkfProjection* out) {
+  return project(points, x, trig, out);
+}
+void sums_baseline(const EkfPoints& points, const EkfProjection& projection, MeasurementSums* out) {
+  measurement_sums(points, projection, out);
 }
 
 #if defined(VISION_AVX2_FMA)
-VISION_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x,
-                                      const EulerTrig& trig, MeasurementSums* out) {
-  return measure(points, x, trig, out);
+VISION_AVX2_FMA bool project_avx2_fma(const EkfPoints& points, const Vector6d& x,
+                                      const EulerTrig& trig, EkfProjection* out) {
+  return project(points, x, trig, out);
+}
+VISION_AVX2_FMA void sums_avx2_fma(const EkfPoints& points, const EkfProjection& projection,
+                                   MeasurementSums* out) {
+  measurement_sums(points, projection, out);
 }
 #endif
 
@@ -189,10 +193,10 @@ VISION_AVX2_FMA bool measure_avx2_fma(const EkfPoints& points, const Vector6d& x
 
 EkfMeasurement ekf_measurement(EkfInstructionSet set) {
 #if defined(VISION_AVX2_FMA)
-  if (set == EkfInstructionSet::kAvx2Fma) return measure_avx2_fma;
+  if (set == EkfInstructionSet::kAvx2Fma) return {project_avx2_fma, sums_avx2_fma};
 #endif
   (void)set;
-  return measure_baseline;
+  return {project_baseline, sums_baseline};
 }
 
 EkfInstructionSet ekf_instruction_set(std::optional<EkfInstructionSet> requested) {

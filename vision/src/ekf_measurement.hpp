@@ -52,11 +52,68 @@ struct MeasurementSums {
   double residual_squared;
 };
 
-// The measurement at state x (whose Euler sines and cosines are `trig`).
-// False, and nothing written, when a point is on or behind the camera
-// (z <= 0). One function per instruction set.
-using EkfMeasurement = bool (*)(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
-                                MeasurementSums* sums);
+// The rotation R = Rz(psi) Ry(theta) Rx(phi) at a state, by the products of
+// Ry Rx (m) and R (r) that the measurement uses, its translation and psi's
+// sine and cosine.
+struct Projection {
+  double sz, cz;                                  // psi
+  double m00, m01, m02, m11, m12, m20, m21, m22;  // Ry Rx (m10 = 0)
+  double r01, r02, r11, r12, r21, r22;            // columns 1 and 2 of R
+  double tx, ty, tz;                              // translation, m
+
+  Projection() = default;
+  Projection(const Vector6d& x, const EulerTrig& trig)
+      : sz(trig.s[0]), cz(trig.c[0]), tx(x(3)), ty(x(4)), tz(x(5)) {
+    const double sy = trig.s[1], cy = trig.c[1], sx = trig.s[2], cx = trig.c[2];
+    m00 = cy;
+    m01 = sy * sx;
+    m02 = sy * cx;
+    m11 = cx;
+    m12 = -sx;
+    m20 = -sy;
+    m21 = cy * sx;
+    m22 = cy * cx;
+    r01 = cz * m01 - sz * m11;
+    r02 = cz * m02 - sz * m12;
+    r11 = sz * m01 + cz * m11;
+    r12 = sz * m02 + cz * m12;
+    r21 = m21;
+    r22 = m22;
+  }
+};
+
+// One block of points projected at a state: what the Jacobian is made of.
+struct ProjectedBlock {
+  Lanes Qx, Qz;    // Ry Rx P
+  Lanes RPx, RPy;  // R P, its first two coordinates
+  Lanes u, v;      // the projected normalised point
+  Lanes ax, by;    // fx / z and fy / z (times the weight), pixels per metre
+  Lanes e0, e1;    // observed minus predicted pixel (times the weight)
+};
+
+// The measurement at one state in two steps: project every point and sum the
+// squared residuals (the cost needs no more), then, for a state the update
+// keeps, the sums of its Jacobian. The caller owns `blocks`, one per block of
+// the points.
+struct EkfProjection {
+  Projection rotation;
+  ProjectedBlock* blocks;
+  double residual_squared;  // |r|^2, pixels^2, as MeasurementSums sums it
+};
+
+// Projects the points at state x (whose Euler sines and cosines are `trig`)
+// into `out`. False, and `out` not usable, when a point is on or behind the
+// camera (z <= 0).
+using EkfProject = bool (*)(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
+                            EkfProjection* out);
+// The sums of the projection's measurement system.
+using EkfSums = void (*)(const EkfPoints& points, const EkfProjection& projection,
+                         MeasurementSums* sums);
+// The two steps, one pair per instruction set.
+struct EkfMeasurement {
+  EkfProject project;
+  EkfSums sums;
+};
 EkfMeasurement ekf_measurement(EkfInstructionSet set);
 
 // The set to run: `requested` where the CPU runs it, else the fastest it runs.

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <utility>
+#include <vector>
 
 #include "ekf_measurement.hpp"
 #include "vision/pose_analytic.hpp"
@@ -106,10 +107,12 @@ Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
   return d.asDiagonal();
 }
 
-// The measurement system at one state, the filter's cost there, the prior's
-// pull P^-1 (x - x_prior) (its gradient), and the state's sines and cosines
-// (the next trial state's start from them).
+// One state as the update sees it: the points projected there, the filter's
+// cost, the prior's pull P^-1 (x - x_prior) (its gradient), the state's
+// sines and cosines (the next trial state's start from them) and, once the
+// update keeps the state, its measurement system.
 struct Linearisation {
+  detail::EkfProjection projection;
   MeasurementSums sums;
   Vector6d prior_pull;
   double cost = 0;
@@ -130,16 +133,19 @@ struct MapCost {
   // instructions a nominal-prior solve with this path, 89.9k without).
   bool prior_is_diagonal;
 
-  // The system at `state`, whose sines and cosines `at->trig` already holds.
+  // The cost at `state`, whose sines and cosines `at->trig` already holds.
   // False when a point is on or behind the camera.
   bool evaluate(const Vector6d& state, Linearisation* at) const {
-    if (!measurement(points, state, at->trig, &at->sums)) return false;
+    if (!measurement.project(points, state, at->trig, &at->projection)) return false;
     const Vector6d d = state_difference(state, x_prior);
     at->prior_pull = prior_is_diagonal ? Vector6d(prior_information.diagonal().cwiseProduct(d))
                                        : prior_information * d;
-    at->cost = inv_r * at->sums.residual_squared + d.dot(at->prior_pull);
+    at->cost = inv_r * at->projection.residual_squared + d.dot(at->prior_pull);
     return true;
   }
+  // The measurement system at a state evaluate() has costed. Only for the
+  // states the update keeps: a trial the update refuses needs its cost alone.
+  void linearise(Linearisation* at) const { measurement.sums(points, at->projection, &at->sums); }
   // The update's information matrix P^-1 + R^-1 H^T H at a state.
   Symmetric6 information(const Linearisation& at) const {
     Symmetric6 I;
@@ -265,6 +271,7 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
       return u;
     }
     u.x += d.step;
+    map.linearise(next);
     std::swap(at, next);
   }
   return u;
@@ -296,13 +303,14 @@ Updates run_updates(EkfInstructionSet set, const MapCost& map, const EkfOptions&
 // Converged or not, and why, once the iterations have stopped at state x.
 // Consistency gate: a state that explains the corners far worse than the
 // measurement noise allows is a wrong local minimum, not a pose.
+// `scratch` takes the projection of x.
 void settle_termination(const MapCost& map, const Vector6d& x, const EkfOptions& options,
-                        Estimate* e) {
+                        detail::EkfProjection* scratch, Estimate* e) {
   if (e->termination == Termination::kConverged) {
-    MeasurementSums sums;
-    map.measurement(map.points, x, euler_trig(x), &sums);
     const double rms =
-        std::sqrt(sums.residual_squared / (2.0 * static_cast<double>(map.points.count)));
+        map.measurement.project(map.points, x, euler_trig(x), scratch)
+            ? std::sqrt(scratch->residual_squared / (2.0 * static_cast<double>(map.points.count)))
+            : HUGE_VAL;
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
       e->message = "converged to a state whose residual (" + std::to_string(rms) +
                    " px RMS per coordinate) exceeds the gate of " +
@@ -326,6 +334,10 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   const EkfInstructionSet set = detail::ekf_instruction_set(options.instruction_set);
   const MapCost map = map_cost(c, prior, prior_covariance, options, set);
   Linearisation systems[2];
+  const size_t blocks = map.points.blocks.size();
+  std::vector<detail::ProjectedBlock> projected(2 * blocks);
+  systems[0].projection.blocks = projected.data();
+  systems[1].projection.blocks = projected.data() + blocks;
   systems[0].trig = euler_trig(map.x_prior);
   Estimate e;
   if (!map.evaluate(map.x_prior, &systems[0])) {
@@ -335,6 +347,7 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
     e.covariance = inverse_spd(map.prior_information);
     return e;
   }
+  map.linearise(&systems[0]);
   const Updates u = run_updates(set, map, options, &systems[0], &systems[1]);
   e.iterations = u.iterations;
   e.termination = u.termination;
@@ -342,7 +355,7 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
     e.message = "the measurement update is singular";
   e.T_cam_target = pose_from_state(u.x);
   e.covariance = inverse_spd(u.information);
-  settle_termination(map, u.x, options, &e);
+  settle_termination(map, u.x, options, &systems[0].projection, &e);
   return e;
 }
 
