@@ -81,19 +81,17 @@ inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, con
       t.c[k] = std::cos(next(k));
       continue;
     }
-    const double s2 = s * s;
-    const double sin_s =
-        s *
-        (1 + s2 * (-1.0 / 6 +
-                   s2 * (1.0 / 120 + s2 * (-1.0 / 5040 +
-                                           s2 * (1.0 / 362880 + s2 * (-1.0 / 39916800 +
-                                                                      s2 * (1.0 / 6227020800)))))));
+    // Both series by Estrin's scheme (pairs of terms, then powers s^4 and s^8
+    // of s^2): six multiplications deep instead of Horner's nine, on the
+    // chain from one trial state to the next.
+    const double s2 = s * s, s4 = s2 * s2, s8 = s4 * s4;
+    const double sin_tail = (-1.0 / 6 + s2 * (1.0 / 120)) +
+                            s4 * (-1.0 / 5040 + s2 * (1.0 / 362880)) +
+                            s8 * (-1.0 / 39916800 + s2 * (1.0 / 6227020800));
+    const double sin_s = s + (s * s2) * sin_tail;
     const double cos_s_minus_1 =
-        s2 * (-0.5 + s2 * (1.0 / 24 +
-                           s2 * (-1.0 / 720 +
-                                 s2 * (1.0 / 40320 + s2 * (-1.0 / 3628800 +
-                                                           s2 * (1.0 / 479001600 +
-                                                                 s2 * (-1.0 / 87178291200.0)))))));
+        s2 * ((-0.5 + s2 * (1.0 / 24)) + s4 * (-1.0 / 720 + s2 * (1.0 / 40320)) +
+              s8 * ((-1.0 / 3628800 + s2 * (1.0 / 479001600)) + s4 * (-1.0 / 87178291200.0)));
     t.s[k] = at.s[k] + (at.s[k] * cos_s_minus_1 + at.c[k] * sin_s);
     t.c[k] = at.c[k] + (at.c[k] * cos_s_minus_1 - at.s[k] * sin_s);
   }
