@@ -15,16 +15,18 @@
 
 namespace vision::detail {
 
-// The sines and cosines of a state's three Euler angles (psi, theta, phi).
-struct EulerTrig {
-  double s[3], c[3];
-};
-
 // Four values, one per point of a block (GCC/Clang vector extension: element
 // arithmetic, SSE2 pairs on baseline x86-64, one AVX register where the
 // target has it). Aligned as a double, so that no allocator or stack frame
 // has to provide 32 bytes (unaligned AVX loads cost nothing on aligned data).
 typedef double Lanes __attribute__((vector_size(32), aligned(8)));
+
+// The sines and cosines of a state's three Euler angles (psi, theta, phi),
+// in the first three lanes (the fourth is not used): the update computes the
+// three together.
+struct EulerTrig {
+  Lanes s, c;
+};
 
 // The correspondences in blocks of four points (structure of arrays): the
 // layout the measurement reads. The last block is padded with copies of the
