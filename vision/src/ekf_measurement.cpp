@@ -65,9 +65,9 @@ static_assert(kTerms % 4 == 0 && kTerms * sizeof(double) == sizeof(MeasurementSu
               "the terms are MeasurementSums, in four-lane groups");
 static_assert(kTT22 == lower_index(5, 5) && kG0 == 21, "H^T H first, by lower_index");
 
-// One block projected at state r: its projected points and residuals, and
-// |r|^2 lane by lane into *residual; false when a point of it is on or behind
-// the camera.
+// One block projected by the state's rotation and translation r: its
+// projected points and residuals, and their squares lane by lane into
+// *residual; false when a point of it is on or behind the camera.
 inline bool project_block(const EkfPoints::Block& p, const Projection& r, ProjectedBlock* q,
                           Lanes* residual) {
   q->Qx = r.m00 * p.X + r.m01 * p.Y + r.m02 * p.Z;

@@ -74,7 +74,7 @@ EulerTrig euler_trig(const Vector6d& x) {
 // the three angles, against about 130 instructions for each of glibc's
 // sincos (callgrind): the update is bound by its floating-point operations
 // as much as by its chain (96 independent multiply-adds added to a trial
-// cost it ~60 cycles), so the three lanes at once took 3 % off a solve.
+// cost it ~60 cycles), so the three lanes at once took about 2 % off a solve.
 inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
   // The three angles at once, a lane each. Both series by Estrin's scheme
   // (pairs of terms, then powers s^4 and s^8 of s^2): six multiplications
