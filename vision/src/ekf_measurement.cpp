@@ -140,12 +140,12 @@ inline void block_terms(const EkfPoints::Block& p, const Projection& r, const Pr
 // whichever instruction set their caller is.
 inline bool project(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
                     EkfProjection* out) {
-  out->rotation = Projection(x, trig);
+  out->pose = Projection(x, trig);
   Lanes residual;
-  if (!project_block(points.blocks[0], out->rotation, &out->blocks[0], &residual)) return false;
+  if (!project_block(points.blocks[0], out->pose, &out->blocks[0], &residual)) return false;
   for (size_t b = 1; b < points.blocks.size(); ++b) {
     Lanes more;
-    if (!project_block(points.blocks[b], out->rotation, &out->blocks[b], &more)) return false;
+    if (!project_block(points.blocks[b], out->pose, &out->blocks[b], &more)) return false;
     residual += more;
   }
   // The lanes summed as sums_of sums them: (0 + 1) + (2 + 3).
@@ -156,10 +156,10 @@ inline bool project(const EkfPoints& points, const Vector6d& x, const EulerTrig&
 inline void measurement_sums(const EkfPoints& points, const EkfProjection& projection,
                              MeasurementSums* out) {
   Lanes t[kTerms];
-  block_terms(points.blocks[0], projection.rotation, projection.blocks[0], t);
+  block_terms(points.blocks[0], projection.pose, projection.blocks[0], t);
   for (size_t b = 1; b < points.blocks.size(); ++b) {
     Lanes more[kTerms];
-    block_terms(points.blocks[b], projection.rotation, projection.blocks[b], more);
+    block_terms(points.blocks[b], projection.pose, projection.blocks[b], more);
     for (int k = 0; k < kTerms; ++k)
       t[k] += more[k];
   }

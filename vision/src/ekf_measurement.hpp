@@ -98,7 +98,7 @@ struct ProjectedBlock {
 // keeps, the sums of its Jacobian. The caller owns `blocks`, one per block of
 // the points.
 struct EkfProjection {
-  Projection rotation;
+  Projection pose;  // the state's rotation products and translation
   ProjectedBlock* blocks;
   double residual_squared;  // |r|^2, pixels^2, as MeasurementSums sums it
 };

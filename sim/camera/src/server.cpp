@@ -106,18 +106,14 @@ void pack(const std::vector<uint16_t>& v, ArvPixelFormat format, int bits, uint8
   }
 }
 
-// The render seed of a carriage position (whole µm): `seed` mixed with
-// both coordinates (SplitMix64's finalizer, so neighbouring positions draw
-// unrelated noise).
+// The render seed of a carriage position: `seed` plus the position in whole
+// µm, x above bit 32 and y below (distinct for positions within 4 km of
+// each other). The renderer mixes whatever seed it is given (consecutive
+// ones are what the per-frame seeds are), so neighbouring positions draw
+// unrelated noise.
 uint64_t position_seed(uint64_t seed, double x_mm, double y_mm) {
-  uint64_t z = seed;
-  for (const double mm : {x_mm, y_mm}) {
-    z += 0x9E3779B97F4A7C15ull + static_cast<uint64_t>(std::llround(mm * 1000));
-    z = (z ^ (z >> 30u)) * 0xBF58476D1CE4E5B9ull;
-    z = (z ^ (z >> 27u)) * 0x94D049BB133111EBull;
-    z ^= z >> 31u;
-  }
-  return z;
+  const auto um = [](double mm) { return static_cast<uint64_t>(std::llround(mm * 1000)); };
+  return seed + (um(x_mm) << 32u) + um(y_mm);
 }
 
 }  // namespace

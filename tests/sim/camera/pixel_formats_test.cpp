@@ -278,10 +278,10 @@ TEST_F(PixelFormats, PacketSizeAndInterPacketDelayAreSet) {
 // the frames measured are held equal) and the test is deterministic; the 2 %
 // margin on the corner RMS allows for the sign of the quantization's effect
 // on one set of draws (the figures are test properties; measured: 19 and 19
-// markers, corner RMS 0.0110 px Mono8, 0.0109 px Mono12). The distance RMS
+// markers, corner RMS 0.0096 px Mono8, 0.0095 px Mono12). The distance RMS
 // over every solver is recorded, not asserted: at ~0.01 mm it is set by the
-// solvers and the 6 views, not by the ADC (measured 0.0146 mm Mono8,
-// 0.0136 mm Mono12).
+// solvers and the 6 views, not by the ADC (measured 0.0128 mm Mono8,
+// 0.0149 mm Mono12).
 struct SweepQuality {
   int markers = 0;              // detections whose id is a target marker in view
   double corner_rms_px = 0;     // against the renderer's ground truth

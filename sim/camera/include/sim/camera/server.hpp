@@ -84,8 +84,8 @@ struct CameraServerOptions {
   bool real_time_exposure = true;
   // Render noise seed: frame k uses seed + k, so a frame can be re-rendered.
   uint64_t seed = 1;
-  // Noise draws per position instead: a frame's render seed is seed mixed
-  // with the carriage position at the start of its exposure (whole µm), the
+  // Noise draws per position instead: a frame's render seed is seed plus
+  // the carriage position at the start of its exposure (whole µm), the
   // same at the same position whatever the frame id. A frame triggered again
   // (an incomplete one on a loaded host) then shifts no later frame's noise,
   // so two runs over the same positions (one pixel format against another)
