@@ -62,40 +62,64 @@ EulerTrig euler_trig(const Vector6d& x) {
   return t;
 }
 
-// The sines and cosines at x + step from those at x: the angle-addition
-// formulas with sin(s) and cos(s) - 1 of a small step as their Taylor series,
-// sin(x + s) = sin x + (sin x (cos s - 1) + cos x sin s), likewise cos. For
-// |s| <= 1/4 the first omitted terms are below s^15 / 15! = 7e-22 and
-// s^16 / 16! = 1.1e-23, so each update is exact to a few units in the last
-// place; along the at most max_iterations steps of one solve that stays below
-// ~1e-13, far inside the 1e-9 to which the iterates are defined
-// (tests/vision/pose_ekf_reference_test.cpp). A larger step takes the sine
-// and cosine of the new angle itself. About twenty vector multiply-adds for
-// the three angles, against about 130 instructions for each of glibc's
-// sincos (callgrind): the update is bound by its floating-point operations
-// as much as by its chain (96 independent multiply-adds added to a trial
-// cost it ~60 cycles), so the three lanes at once took about 2 % off a solve.
-inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
-  // The three angles at once, a lane each. Both series by Estrin's scheme
-  // (pairs of terms, then powers s^4 and s^8 of s^2): six multiplications
-  // deep instead of Horner's nine, on the chain from one trial state to the
-  // next.
-  const detail::Lanes s = {step(0), step(1), step(2), 0.0};
+// sin s and cos s - 1 of three angles s (lanes 0-2) with |s| <= 1/4, by their
+// Taylor series: the first omitted terms are below s^15 / 15! = 7e-22 and
+// s^16 / 16! = 1.1e-23, so both are exact to a few units in the last place.
+// Estrin's scheme (pairs of terms, then powers s^4 and s^8 of s^2): six
+// multiplications deep instead of Horner's nine, on the chain from one
+// trial state to the next. (Vectors pass by reference: by value, their
+// calling convention would depend on the instruction set.)
+inline void small_step_trig(const detail::Lanes& s, detail::Lanes* sin_s,
+                            detail::Lanes* cos_s_minus_1) {
   const detail::Lanes s2 = s * s, s4 = s2 * s2, s8 = s4 * s4;
   const detail::Lanes sin_tail = (-1.0 / 6 + s2 * (1.0 / 120)) +
                                  s4 * (-1.0 / 5040 + s2 * (1.0 / 362880)) +
                                  s8 * (-1.0 / 39916800 + s2 * (1.0 / 6227020800));
-  const detail::Lanes sin_s = s + (s * s2) * sin_tail;
-  const detail::Lanes cos_s_minus_1 =
+  *sin_s = s + (s * s2) * sin_tail;
+  *cos_s_minus_1 =
       s2 * ((-0.5 + s2 * (1.0 / 24)) + s4 * (-1.0 / 720 + s2 * (1.0 / 40320)) +
             s8 * ((-1.0 / 3628800 + s2 * (1.0 / 479001600)) + s4 * (-1.0 / 87178291200.0)));
+}
+
+// The sines and cosines at x + step from those at x, the three angles at
+// once, a lane each: the angle-addition formulas sin(x + s) = sin x + (sin x
+// (cos s - 1) + cos x sin s), likewise cos, with small_step_trig. When a
+// step exceeds 1/4 rad (from the nominal prior, ~30 of a solve's ~230),
+// all three are taken at s / 16 and doubled back four times: sin 2a = 2 sin
+// a (1 + (cos a - 1)), cos 2a - 1 = -2 sin^2 a, a few units in the last
+// place each. Each update is exact to ~1e-15; along the at most
+// max_iterations steps of one solve that stays below ~1e-13, far inside the
+// 1e-9 to which the iterates are defined
+// (tests/vision/pose_ekf_reference_test.cpp). A step beyond 4 rad takes the
+// sine and cosine of the new angle itself. About twenty vector multiply-adds
+// for the three angles, against about 130 instructions for each of glibc's
+// sincos (callgrind): the update is bound by its floating-point operations
+// as much as by its chain (96 independent multiply-adds added to a trial
+// cost it ~60 cycles), so the three lanes at once took about 2 % off a solve
+// and the large steps without libm another 5 % (ABBA runs of bench_solvers).
+inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
+  const detail::Lanes s = {step(0), step(1), step(2), 0.0};
+  const double largest = step.head<3>().cwiseAbs().maxCoeff();
+  detail::Lanes sin_s, cos_s_minus_1;
+  if (largest <= 0.25) {
+    small_step_trig(s, &sin_s, &cos_s_minus_1);
+  } else {
+    small_step_trig(s * (1.0 / 16), &sin_s, &cos_s_minus_1);
+    for (int doubling = 0; doubling < 4; ++doubling) {
+      const detail::Lanes sin_2s = 2.0 * sin_s * (1.0 + cos_s_minus_1);
+      cos_s_minus_1 = -2.0 * sin_s * sin_s;
+      sin_s = sin_2s;
+    }
+  }
   EulerTrig t;
   t.s = at.s + (at.s * cos_s_minus_1 + at.c * sin_s);
   t.c = at.c + (at.c * cos_s_minus_1 - at.s * sin_s);
-  for (int k = 0; k < 3; ++k) {
-    if (!(std::abs(step(k)) <= 0.25)) {
-      t.s[k] = std::sin(next(k));
-      t.c[k] = std::cos(next(k));
+  if (!(largest <= 4.0)) {
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::abs(step(k)) <= 4.0)) {
+        t.s[k] = std::sin(next(k));
+        t.c[k] = std::cos(next(k));
+      }
     }
   }
   return t;
