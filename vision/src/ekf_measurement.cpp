@@ -45,7 +45,7 @@ EkfPoints::EkfPoints(const Correspondences& c) : count(c.size()) {
 namespace {
 
 // The 28 sums that make H^T H (lower triangle, row by row, as lower_index
-// keeps it), H^T r and |r|^2: the layout of MeasurementSums, so that the sums
+// keeps it), H^T r and a zero: the layout of MeasurementSums, so that the sums
 // over the lanes, four at a time, are stored as they come. H^T H's (ty, tx)
 // entry is zero (a point's x row has no ty term, its y row no tx term).
 // clang-format off
@@ -57,7 +57,7 @@ enum Term {
   kTY0, kTY1, kTY2, kTT10, kTT11,
   kTZ0, kTZ1, kTZ2, kTT20, kTT21, kTT22,
   kG0, kG1, kG2, kG3, kG4, kG5,   // gradient H^T r
-  kResidual,                      // |r|^2
+  kUnused,                        // MeasurementSums::unused, always 0
   kTerms
 };
 // clang-format on
@@ -109,7 +109,6 @@ inline void block_terms(const EkfPoints::Block& p, const Projection& r, const Pr
   t[kRR00] = a0 * a0 + b0 * b0;
   t[kRR11] = a1 * a1 + b1 * b1;
   t[kRR22] = a2 * a2 + b2 * b2;
-  t[kResidual] = e0 * e0 + e1 * e1;
   t[kRR10] = a1 * a0 + b1 * b0;
   t[kRR20] = a2 * a0 + b2 * b0;
   t[kRR21] = a2 * a1 + b2 * b1;
@@ -134,6 +133,7 @@ inline void block_terms(const EkfPoints::Block& p, const Projection& r, const Pr
   t[kG4] = e1 * by;
   t[kG5] = -(e0 * axu + e1 * byv);
   t[kTT10] = Lanes{};
+  t[kUnused] = Lanes{};
 }
 
 // The measurement's two steps (vision/src/ekf_measurement.hpp), built for
@@ -148,7 +148,7 @@ inline bool project(const EkfPoints& points, const Vector6d& x, const EulerTrig&
     if (!project_block(points.blocks[b], out->pose, &out->blocks[b], &more)) return false;
     residual += more;
   }
-  // The lanes summed as sums_of sums them: (0 + 1) + (2 + 3).
+  // The lanes summed as sums_of sums the others: (0 + 1) + (2 + 3).
   out->residual_squared = (residual[0] + residual[1]) + (residual[2] + residual[3]);
   return true;
 }

@@ -46,12 +46,13 @@ struct EkfPoints {
 
 // The sums the update takes from the measurement at one state, in the order
 // the measurement accumulates them: H^T H (pixels^2 per state unit^2) by its
-// lower triangle, H^T r, and |r|^2 (pixels^2), where r = z - h(x) is the
-// observed minus the predicted undistorted pixel of every point.
+// lower triangle and H^T r, where r = z - h(x) is the observed minus the
+// predicted undistorted pixel of every point (|r|^2 is the projection's:
+// EkfProjection). `unused` makes the 28 sums seven groups of four lanes.
 struct MeasurementSums {
   Symmetric6 HtH;
   double Htr[6];
-  double residual_squared;
+  double unused;
 };
 
 // The rotation R = Rz(psi) Ry(theta) Rx(phi) at a state, by the products of
@@ -100,7 +101,7 @@ struct ProjectedBlock {
 struct EkfProjection {
   Projection pose;  // the state's rotation products and translation
   ProjectedBlock* blocks;
-  double residual_squared;  // |r|^2, pixels^2, as MeasurementSums sums it
+  double residual_squared;  // |r|^2, pixels^2
 };
 
 // Projects the points at state x (whose Euler sines and cosines are `trig`)
