@@ -83,6 +83,12 @@ struct Projection {
     r21 = m21;
     r22 = m22;
   }
+  // R itself.
+  Eigen::Matrix3d rotation() const {
+    Eigen::Matrix3d R;
+    R << cz * m00, r01, r02, sz * m00, r11, r12, m20, r21, r22;
+    return R;
+  }
 };
 
 // One block of points projected at a state: what the Jacobian is made of.

@@ -186,8 +186,15 @@ struct MapCost {
 
 MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& prior_covariance,
                  const EkfOptions& options, EkfInstructionSet set) {
-  const Symmetric6 prior_information =
-      lower_triangle(inverse_spd(lower_triangle(prior_covariance)));
+  const Symmetric6 covariance = lower_triangle(prior_covariance);
+  // A diagonal P (the nominal prior, the analytic start) inverts entry by entry.
+  Symmetric6 prior_information{};
+  if (covariance.is_diagonal()) {
+    for (int i = 0; i < 6; ++i)
+      prior_information.lower[detail::lower_index(i, i)] = 1.0 / prior_covariance(i, i);
+  } else {
+    prior_information = lower_triangle(inverse_spd(covariance));
+  }
   return {EkfPoints(c),
           detail::ekf_measurement(set),
           state_from_pose(prior),
@@ -252,10 +259,12 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
   return out;
 }
 
-// Where the updates stopped: the state, the information matrix of the last
-// update, how many updates, and why they stopped.
+// Where the updates stopped: the state, the system there (its projection and
+// sines and cosines), the information matrix of the last update, how many
+// updates, and why they stopped.
 struct Updates {
   Vector6d x;
+  const Linearisation* at_x = nullptr;
   Symmetric6 information;
   int iterations = 0;
   Termination termination = Termination::kMaxIterations;
@@ -277,6 +286,7 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
                            Linearisation* next) {
   Updates u;
   u.x = map.x_prior;
+  u.at_x = at;
   u.information = map.prior_information;
   Damping damping;
   for (int it = 1; it <= options.max_iterations; ++it) {
@@ -292,12 +302,16 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
       // No step lowers the cost any more, or the step is negligible: the
       // minimum, to rounding.
       u.termination = Termination::kConverged;
-      if (d.accepted) u.x += d.step;
+      if (d.accepted) {
+        u.x += d.step;
+        u.at_x = next;
+      }
       return u;
     }
     u.x += d.step;
     map.linearise(next);
     std::swap(at, next);
+    u.at_x = at;
   }
   return u;
 }
@@ -325,17 +339,14 @@ Updates run_updates(EkfInstructionSet set, const MapCost& map, const EkfOptions&
   return run_updates_baseline(map, options, at, next);
 }
 
-// Converged or not, and why, once the iterations have stopped at state x.
-// Consistency gate: a state that explains the corners far worse than the
-// measurement noise allows is a wrong local minimum, not a pose.
-// `scratch` takes the projection of x.
-void settle_termination(const MapCost& map, const Vector6d& x, const EkfOptions& options,
-                        detail::EkfProjection* scratch, Estimate* e) {
+// Converged or not, and why, once the iterations have stopped with the
+// residual |r|^2 (pixels^2) at their state. Consistency gate: a state that
+// explains the corners far worse than the measurement noise allows is a
+// wrong local minimum, not a pose.
+void settle_termination(const MapCost& map, double residual_squared, const EkfOptions& options,
+                        Estimate* e) {
   if (e->termination == Termination::kConverged) {
-    const double rms =
-        map.measurement.project(map.points, x, euler_trig(x), scratch)
-            ? std::sqrt(scratch->residual_squared / (2.0 * static_cast<double>(map.points.count)))
-            : HUGE_VAL;
+    const double rms = std::sqrt(residual_squared / (2.0 * static_cast<double>(map.points.count)));
     if (rms > options.gate_sigmas * options.measurement_sigma_px) {
       e->message = "converged to a state whose residual (" + std::to_string(rms) +
                    " px RMS per coordinate) exceeds the gate of " +
@@ -359,10 +370,14 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   const EkfInstructionSet set = detail::ekf_instruction_set(options.instruction_set);
   const MapCost map = map_cost(c, prior, prior_covariance, options, set);
   Linearisation systems[2];
+  // The two systems' projected blocks: on the stack up to 16 points.
+  constexpr size_t kStackBlocks = 4;
   const size_t blocks = map.points.blocks.size();
-  std::vector<detail::ProjectedBlock> projected(2 * blocks);
-  systems[0].projection.blocks = projected.data();
-  systems[1].projection.blocks = projected.data() + blocks;
+  detail::ProjectedBlock stack_blocks[2 * kStackBlocks];
+  std::vector<detail::ProjectedBlock> heap_blocks(blocks > kStackBlocks ? 2 * blocks : 0);
+  detail::ProjectedBlock* projected = blocks > kStackBlocks ? heap_blocks.data() : stack_blocks;
+  systems[0].projection.blocks = projected;
+  systems[1].projection.blocks = projected + blocks;
   systems[0].trig = euler_trig(map.x_prior);
   Estimate e;
   if (!map.evaluate(map.x_prior, &systems[0])) {
@@ -378,9 +393,10 @@ Estimate iterated_ekf(const Correspondences& c, const Pose& prior, const Matrix6
   e.termination = u.termination;
   if (u.termination == Termination::kNumericalFailure)
     e.message = "the measurement update is singular";
-  e.T_cam_target = pose_from_state(u.x);
+  // The rotation from the sines and cosines the updates carried to u.x.
+  e.T_cam_target = {u.at_x->projection.pose.rotation(), u.x.tail<3>()};
   e.covariance = inverse_spd(u.information);
-  settle_termination(map, u.x, options, &systems[0].projection, &e);
+  settle_termination(map, u.at_x->projection.residual_squared, options, &e);
   return e;
 }
 
