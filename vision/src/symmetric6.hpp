@@ -77,11 +77,11 @@ inline double symmetric3(const double m[6], int i, int j) {
 // The adjugate of a symmetric 3x3 matrix and its determinant, both from its
 // lower triangle (m00, m10, m11, m20, m21, m22); the adjugate by its lower
 // triangle too. The inverse is adj / det. False when the determinant is
-// outside 1e-200..1e200 in magnitude (zero and not finite included): for
-// entries of size s the determinant is about s^3, and Spd6 forms products
-// with the adjugate of about s^4 before it divides, which must stay well
-// inside double's normal range (1e-308..1e308) to keep their precision;
-// the caller then solves another way.
+// outside 1e-200..1e200 in magnitude (zero and not finite included): Spd6
+// forms products as large as the determinant of its scaled Schur complement
+// (below) before it divides, which must stay well inside double's normal
+// range (1e-308..1e308) to keep their precision; the caller then solves
+// another way.
 struct Adjugate3 {
   double adj[6];
   double det;
@@ -105,14 +105,20 @@ inline bool adjugate3_symmetric(const double m[6], Adjugate3* out) {
 // eliminated through the Schur complement S = A22 - A21 A11^-1 A21^T, both
 // 3x3 inverses in closed form as adjugate over determinant. No pivoting (the
 // blocks of a positive-definite matrix and its Schur complement are positive
-// definite). Each determinant's division runs beside the products with its
-// adjugate, which are scaled by the reciprocal only once they are done: the
-// solve waits for two divisions, not for two inverses. `ok` is false when a
-// block is singular to rounding or its scale is extreme (adjugate3_symmetric).
+// definite). With d = det(A11) and adj(A11) = d A11^-1, the elimination is
+// carried scaled by d, so that no step waits for a division until the end:
+// V = adj(A11) A21^T, S' = d S = d A22 - A21 V, and for b = (b1, b2)
+//   y' = adj(A11) b1, r' = d b2 - A21 y', x2 = adj(S') r' / det(S'),
+//   x1 = (y' - V x2) / d,
+// the two reciprocals computed beside the products they scale. S' is of
+// size s^4 for entries of size s and det(S') of size s^12, which
+// adjugate3_symmetric's bounds keep inside double's range. `ok` is false when
+// a block is singular to rounding or its scale is extreme; the caller then
+// solves another way.
 struct Spd6 {
-  Adjugate3 a11, schur;  // of A11 and of S
+  Adjugate3 a11, schur;  // of A11 and of S'
   double inv_det11 = 0, inv_det_schur = 0;
-  double A21[3][3], V[3][3];  // V = adj(A11) A21^T, so A11^-1 A21^T = V / det(A11)
+  double A21[3][3], V[3][3];  // V = adj(A11) A21^T
   bool ok = false;
 
   explicit Spd6(const Symmetric6& A, double diagonal_scale = 1.0) {
@@ -131,8 +137,8 @@ struct Spd6 {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j <= i; ++j)
         S[lower_index(i, j)] =
-            a[lower_index(3 + i, 3 + j)] * (i == j ? diagonal_scale : 1.0) -
-            (A21[i][0] * V[0][j] + A21[i][1] * V[1][j] + A21[i][2] * V[2][j]) * inv_det11;
+            a11.det * (a[lower_index(3 + i, 3 + j)] * (i == j ? diagonal_scale : 1.0)) -
+            (A21[i][0] * V[0][j] + A21[i][1] * V[1][j] + A21[i][2] * V[2][j]);
     if (!adjugate3_symmetric(S, &schur)) return;
     inv_det_schur = 1.0 / schur.det;
     ok = true;
@@ -142,15 +148,15 @@ struct Spd6 {
   Vector6d solve(const Vector6d& b) const {
     double y1[3], r[3], x2[3];
     for (int i = 0; i < 3; ++i)
-      y1[i] = (adj11(i, 0) * b(0) + adj11(i, 1) * b(1) + adj11(i, 2) * b(2)) * inv_det11;
+      y1[i] = adj11(i, 0) * b(0) + adj11(i, 1) * b(1) + adj11(i, 2) * b(2);
     for (int i = 0; i < 3; ++i)
-      r[i] = b(3 + i) - (A21[i][0] * y1[0] + A21[i][1] * y1[1] + A21[i][2] * y1[2]);
+      r[i] = a11.det * b(3 + i) - (A21[i][0] * y1[0] + A21[i][1] * y1[1] + A21[i][2] * y1[2]);
     for (int i = 0; i < 3; ++i)
       x2[i] = (adj_schur(i, 0) * r[0] + adj_schur(i, 1) * r[1] + adj_schur(i, 2) * r[2]) *
               inv_det_schur;
     Vector6d x;
     for (int i = 0; i < 3; ++i) {
-      x(i) = y1[i] - (V[i][0] * x2[0] + V[i][1] * x2[1] + V[i][2] * x2[2]) * inv_det11;
+      x(i) = (y1[i] - (V[i][0] * x2[0] + V[i][1] * x2[1] + V[i][2] * x2[2])) * inv_det11;
       x(3 + i) = x2[i];
     }
     return x;
