@@ -97,9 +97,9 @@ TEST(EkfSolver, CarriedCovarianceShrinksFrameByFrame) {
 // is below 1e-24 m. The rounding of the two 6x6 inversions (the prior's
 // information, then the posterior) is at most cond^2 x eps each for the block
 // solve, with cond = 18 for this seed's matrix: 2 x 324 x 1.1e-16 = 7e-14
-// (measured: 1e-16 to 5e-16). A solve whose intermediate products leave
-// double's normal range (entries of 1e-80 raised to the fourth power) misses
-// by 1e-6 to 1 instead. Fixed seed.
+// (measured: 1e-16 to 5e-16). A block solve without its scale bounds, whose
+// products reach the twelfth power of the entries, returns NaN at every one
+// of these scales instead (checked). Fixed seed.
 TEST(IteratedEkf, TightPriorsOfAnyScaleComeBackAsThePosterior) {
   const vision::Camera camera = vision::Camera::paper_default();
   std::mt19937_64 rng(3);

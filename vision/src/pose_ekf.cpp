@@ -211,8 +211,9 @@ struct Damping {
 };
 
 struct DampedStep {
-  Vector6d step = Vector6d::Zero();  // not finite when the damped system is singular
+  Vector6d step = Vector6d::Zero();  // the step taken, when accepted
   bool accepted = false;             // it lowers the cost; `*next` is the state it reaches
+  bool singular = false;             // a damped system's solution was not finite
 };
 
 // The least-damped step from x that lowers the cost (`at` is the system at
@@ -227,23 +228,29 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
                               Damping* damping, Linearisation* next) {
   DampedStep out;
   while (damping->lambda <= 1e10) {
-    out.step = detail::solve_spd(information, gradient, 1.0 + damping->lambda);
-    if (!out.step.allFinite()) break;
+    const Vector6d step = detail::solve_spd(information, gradient, 1.0 + damping->lambda);
     // The model's decrease 2 s.g - s.I.s, with I s = g - lambda diag(I) s
     // (the damped system solved): s.g + lambda sum I_ii s_i^2, no 6x6 product.
     const double predicted =
-        out.step.dot(gradient) + damping->lambda * information.diagonal().dot(out.step.cwiseAbs2());
+        step.dot(gradient) + damping->lambda * information.diagonal().dot(step.cwiseAbs2());
+    // A step with an entry not finite has a predicted decrease not finite (the
+    // diagonal of I and lambda are positive): one test in the common case, not six.
+    if (!std::isfinite(predicted) && !step.allFinite()) {
+      out.singular = true;
+      break;
+    }
     // A step the model does not predict to lower the cost is refused without
     // evaluating it.
     if (predicted > 0) {
       // Its reciprocal now, while the trial state is measured: the gain below
       // then waits for a multiplication, not for a division.
       const double inv_predicted = 1.0 / predicted;
-      const Vector6d trial = x + out.step;
-      next->trig = euler_trig_after(at.trig, out.step, trial);
+      const Vector6d trial = x + step;
+      next->trig = euler_trig_after(at.trig, step, trial);
       if (map.evaluate(trial, next) && next->cost <= at.cost) {
         const double decrease = at.cost - next->cost;
         if (decrease > 0) {  // a gain above zero
+          out.step = step;
           out.accepted = true;
           // 2 gain - 1 and 1 - (2 gain - 1)^3, a multiply-add each.
           const double ratio = std::fma(decrease, 2 * inv_predicted, -1.0);
@@ -294,7 +301,7 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
     u.information = map.information(*at);
     const Vector6d gradient = map.gradient(*at);
     const DampedStep d = damped_step(map, u.x, *at, u.information, gradient, &damping, next);
-    if (!d.step.allFinite()) {
+    if (d.singular) {
       u.termination = Termination::kNumericalFailure;
       return u;
     }
