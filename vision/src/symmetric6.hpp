@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <cmath>
+#include <cstring>
 
 namespace vision::detail {
 
@@ -154,11 +155,15 @@ struct Spd6 {
     for (int i = 0; i < 3; ++i)
       x2[i] = (adj_schur(i, 0) * r[0] + adj_schur(i, 1) * r[1] + adj_schur(i, 2) * r[2]) *
               inv_det_schur;
+    double x1[3];
+    for (int i = 0; i < 3; ++i)
+      x1[i] = (y1[i] - (V[i][0] * x2[0] + V[i][1] * x2[1] + V[i][2] * x2[2])) * inv_det11;
+    // Stored as pairs, the way Eigen's vectorised expressions read a Vector6d
+    // back, so that each read takes its pair straight from the store.
+    typedef double Pair __attribute__((vector_size(16)));
+    const Pair pairs[3] = {{x1[0], x1[1]}, {x1[2], x2[0]}, {x2[1], x2[2]}};
     Vector6d x;
-    for (int i = 0; i < 3; ++i) {
-      x(i) = (y1[i] - (V[i][0] * x2[0] + V[i][1] * x2[1] + V[i][2] * x2[2])) * inv_det11;
-      x(3 + i) = x2[i];
-    }
+    std::memcpy(x.data(), pairs, sizeof pairs);
     return x;
   }
 
