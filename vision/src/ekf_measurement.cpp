@@ -1,5 +1,6 @@
 #include "ekf_measurement.hpp"
 
+#include <cstddef>
 #include <cstring>
 
 namespace vision::detail {
@@ -56,14 +57,16 @@ enum Term {
   kTX0, kTX1, kTX2, kTT00,        // translation rows x rotation columns; translation block
   kTY0, kTY1, kTY2, kTT10, kTT11,
   kTZ0, kTZ1, kTZ2, kTT20, kTT21, kTT22,
-  kG0, kG1, kG2, kG3, kG4, kG5,   // gradient H^T r
   kUnused,                        // MeasurementSums::unused, always 0
+  kG0, kG1, kG2, kG3, kG4, kG5,   // gradient H^T r
   kTerms
 };
 // clang-format on
 static_assert(kTerms % 4 == 0 && kTerms * sizeof(double) == sizeof(MeasurementSums),
               "the terms are MeasurementSums, in four-lane groups");
-static_assert(kTT22 == lower_index(5, 5) && kG0 == 21, "H^T H first, by lower_index");
+static_assert(kTT22 == lower_index(5, 5) && kG0 == 22, "H^T H first, by lower_index");
+static_assert(offsetof(MeasurementSums, Htr) == kG0 * sizeof(double) && kG0 % 2 == 0,
+              "H^T r where the terms put it, on a 16-byte boundary");
 
 // One block projected by the state's rotation and translation r: its
 // projected points and residuals, and their squares lane by lane into
@@ -120,10 +123,10 @@ inline void block_sums(const EkfPoints::Block& p, const Projection& r, const Pro
   sums_of(by * b2, zero, by * by, -(axu * a0 + byv * b0), &sums[3]);
   // kTZ1, kTZ2, kTT20, kTT21
   sums_of(-(axu * a1 + byv * b1), -(axu * a2 + byv * b2), -(ax * axu), -(by * byv), &sums[4]);
-  // kTT22, kG0, kG1, kG2
-  sums_of(axu * axu + byv * byv, e0 * a0 + e1 * b0, e0 * a1 + e1 * b1, e0 * a2 + e1 * b2, &sums[5]);
-  // kG3, kG4, kG5, kUnused
-  sums_of(e0 * ax, e1 * by, -(e0 * axu + e1 * byv), zero, &sums[6]);
+  // kTT22, kUnused, kG0, kG1
+  sums_of(axu * axu + byv * byv, zero, e0 * a0 + e1 * b0, e0 * a1 + e1 * b1, &sums[5]);
+  // kG2, kG3, kG4, kG5
+  sums_of(e0 * a2 + e1 * b2, e0 * ax, e1 * by, -(e0 * axu + e1 * byv), &sums[6]);
 }
 
 // The measurement's two steps (vision/src/ekf_measurement.hpp), built for

@@ -48,11 +48,14 @@ struct EkfPoints {
 // the measurement accumulates them: H^T H (pixels^2 per state unit^2) by its
 // lower triangle and H^T r, where r = z - h(x) is the observed minus the
 // predicted undistorted pixel of every point (|r|^2 is the projection's:
-// EkfProjection). `unused` makes the 28 sums seven groups of four lanes.
+// EkfProjection). `unused` makes the 28 sums seven groups of four lanes,
+// which the measurement stores 32 bytes at a time; it also puts H^T r on a
+// 16-byte boundary, so that none of the pairs in which Eigen reads it back
+// straddles two of those stores (a load that does waits for both to retire).
 struct MeasurementSums {
   Symmetric6 HtH;
-  double Htr[6];
   double unused;
+  double Htr[6];
 };
 
 // The rotation R = Rz(psi) Ry(theta) Rx(phi) at a state, by the products of
