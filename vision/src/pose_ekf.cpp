@@ -227,12 +227,12 @@ inline DampedStep damped_step(const MapCost& map, const Vector6d& x, const Linea
                               const Symmetric6& information, const Vector6d& gradient,
                               Damping* damping, Linearisation* next) {
   DampedStep out;
+  const Vector6d diagonal = information.diagonal();
   while (damping->lambda <= 1e10) {
     const Vector6d step = detail::solve_spd(information, gradient, 1.0 + damping->lambda);
     // The model's decrease 2 s.g - s.I.s, with I s = g - lambda diag(I) s
     // (the damped system solved): s.g + lambda sum I_ii s_i^2, no 6x6 product.
-    const double predicted =
-        step.dot(gradient) + damping->lambda * information.diagonal().dot(step.cwiseAbs2());
+    const double predicted = step.dot(gradient) + damping->lambda * diagonal.dot(step.cwiseAbs2());
     // A step with an entry not finite has a predicted decrease not finite (the
     // diagonal of I and lambda are positive): one test in the common case, not six.
     if (!std::isfinite(predicted) && !step.allFinite()) {
