@@ -97,12 +97,13 @@ inline bool project_block(const EkfPoints::Block& p, const Projection& r, Projec
 // Term's order, into sums[kTerms / 4]. Each group of four is reduced as soon
 // as it is made, so that a few vectors are live rather than 28 (AVX2 has 16
 // registers): spilling and reloading all 28 made a 4-point solve ~4 % and a
-// 16-point one ~10 % slower (bench_solvers, ABBA). With Q = Ry Rx P: dR/dpsi P = e_z x (R P) =
-// (-(RP)_y, (RP)_x, 0), dR/dtheta P = Rz (e_y x Q) = (cos psi Q_z, sin psi Q_z, -Q_x), dR/dphi P =
-// R (e_x x P) = R (0, -P_z, P_y). The two rows of dh/dp are fx/z (1, 0, -u) and fy/z (0, 1, -v) (u,
-// v the projected point), so the translation columns of H are those rows themselves, and every
-// entry of H^T H that involves them is a rotation column scaled by fx/z or fy/z, or a sum of
-// squares.
+// 16-point one ~10 % slower (bench_solvers, ABBA). With Q = Ry Rx P:
+// dR/dpsi P = e_z x (R P) = (-(RP)_y, (RP)_x, 0), dR/dtheta P = Rz (e_y x Q)
+// = (cos psi Q_z, sin psi Q_z, -Q_x), dR/dphi P = R (e_x x P) = R (0, -P_z,
+// P_y). The two rows of dh/dp are fx/z (1, 0, -u) and fy/z (0, 1, -v) (u, v
+// the projected point), so the translation columns of H are those rows
+// themselves, and every entry of H^T H that involves them is a rotation
+// column scaled by fx/z or fy/z, or a sum of squares.
 inline void block_sums(const EkfPoints::Block& p, const Projection& r, const ProjectedBlock& q,
                        Lanes sums[kTerms / 4]) {
   const Lanes &ax = q.ax, &by = q.by, &u = q.u, &v = q.v, &e0 = q.e0, &e1 = q.e1;
