@@ -1,8 +1,8 @@
 // The EKF's measurement system (Maidi et al. 2010, eqs. 15-17 and 29): the
 // residuals of the projected corners and their Jacobian with respect to the
 // state (psi, theta, phi, tx, ty, tz), accumulated into H^T H and H^T r,
-// four points at a time. Internal to vision::iterated_ekf
-// (vision/include/vision/pose_ekf.hpp).
+// four points at a time, and weighted into the update's system. Internal to
+// vision::iterated_ekf (vision/include/vision/pose_ekf.hpp).
 #pragma once
 
 #include <Eigen/Core>
@@ -44,18 +44,30 @@ struct EkfPoints {
   explicit EkfPoints(const Correspondences& c);
 };
 
-// The sums the update takes from the measurement at one state, in the order
-// the measurement accumulates them: H^T H (pixels^2 per state unit^2) by its
-// lower triangle and H^T r, where r = z - h(x) is the observed minus the
-// predicted undistorted pixel of every point (|r|^2 is the projection's:
-// EkfProjection). `unused` makes the 28 sums seven groups of four lanes,
-// which the measurement stores 32 bytes at a time; it also puts H^T r on a
-// 16-byte boundary, so that none of the pairs in which Eigen reads it back
-// straddles two of those stores (a load that does waits for both to retire).
-struct MeasurementSums {
-  Symmetric6 HtH;
+// The update's system at one state, which the measurement makes from its
+// sums: the information I = P^-1 + R^-1 H^T H (per state unit^2) by its
+// lower triangle and R^-1 H^T r (per state unit), where r = z - h(x) is the
+// observed minus the predicted undistorted pixel of every point (|r|^2 is
+// the projection's: EkfProjection). `unused` makes the 28 terms seven groups
+// of four lanes, which the measurement stores 32 bytes at a time; it also
+// puts H^T r on a 16-byte boundary, so that none of the pairs in which Eigen
+// reads it back straddles two of those stores (a load that does waits for
+// both to retire).
+struct UpdateSystem {
+  Symmetric6 information;
   double unused;
-  double Htr[6];
+  double weighted_Htr[6];
+};
+
+// What turns the measurement's sums into the update's system, system = prior
+// + inv_r sums: the prior's information P^-1 in UpdateSystem's layout (zero
+// for H^T r and `unused`), as the seven groups of four lanes the measurement
+// adds it to, and R^-1 = 1 / sigma^2, px^-2.
+struct SystemWeights {
+  Lanes prior[sizeof(UpdateSystem) / sizeof(Lanes)];
+  double inv_r;
+
+  SystemWeights(const Symmetric6& prior_information, double inv_r);
 };
 
 // The rotation R = Rz(psi) Ry(theta) Rx(phi) at a state, by the products of
@@ -118,13 +130,13 @@ struct EkfProjection {
 // camera (z <= 0).
 using EkfProject = bool (*)(const EkfPoints& points, const Vector6d& x, const EulerTrig& trig,
                             EkfProjection* out);
-// The sums of the projection's measurement system.
-using EkfSums = void (*)(const EkfPoints& points, const EkfProjection& projection,
-                         MeasurementSums* sums);
+// The update's system from the projection's Jacobian sums, weighted by `w`.
+using EkfSystem = void (*)(const EkfPoints& points, const EkfProjection& projection,
+                           const SystemWeights& w, UpdateSystem* system);
 // The two steps, one pair per instruction set.
 struct EkfMeasurement {
   EkfProject project;
-  EkfSums sums;
+  EkfSystem system;
 };
 EkfMeasurement ekf_measurement(EkfInstructionSet set);
 

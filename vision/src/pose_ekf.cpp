@@ -14,8 +14,8 @@ using detail::EkfPoints;
 using detail::EulerTrig;
 using detail::inverse_spd;
 using detail::lower_triangle;
-using detail::MeasurementSums;
 using detail::Symmetric6;
+using detail::UpdateSystem;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
 
 Pose pose_from_state(const Vector6d& x) {
@@ -135,10 +135,10 @@ Matrix6d diagonal_covariance(double sigma_angle, double sigma_translation) {
 // One state as the update sees it: the points projected there, the filter's
 // cost, the prior's pull P^-1 (x - x_prior) (its gradient), the state's
 // sines and cosines (the next trial state's start from them) and, once the
-// update keeps the state, its measurement system.
+// update keeps the state, its system.
 struct Linearisation {
   detail::EkfProjection projection;
-  MeasurementSums sums;
+  UpdateSystem system;
   Vector6d prior_pull;
   double cost = 0;
   EulerTrig trig;
@@ -150,8 +150,9 @@ struct MapCost {
   EkfPoints points;
   detail::EkfMeasurement measurement;
   Vector6d x_prior;
-  Symmetric6 prior_information;  // P^-1
-  double inv_r;                  // R^-1 = 1 / sigma^2, px^-2
+  Symmetric6 prior_information;   // P^-1
+  double inv_r;                   // R^-1 = 1 / sigma^2, px^-2
+  detail::SystemWeights weights;  // the two in the layout the measurement adds them in
   // P^-1 has exact zeros off its diagonal (the nominal prior, the analytic
   // start): its product with a state difference is then the diagonal's, which
   // gives the same bits without the 30 products by zero (callgrind: 86.8k
@@ -168,19 +169,15 @@ struct MapCost {
     at->cost = inv_r * at->projection.residual_squared + d.dot(at->prior_pull);
     return true;
   }
-  // The measurement system at a state evaluate() has costed. Only for the
-  // states the update keeps: a trial the update refuses needs its cost alone.
-  void linearise(Linearisation* at) const { measurement.sums(points, at->projection, &at->sums); }
-  // The update's information matrix P^-1 + R^-1 H^T H at a state.
-  Symmetric6 information(const Linearisation& at) const {
-    Symmetric6 I;
-    for (int k = 0; k < 21; ++k)
-      I.lower[k] = prior_information.lower[k] + inv_r * at.sums.HtH.lower[k];
-    return I;
+  // The update's system at a state evaluate() has costed (its information
+  // P^-1 + R^-1 H^T H and R^-1 H^T r). Only for the states the update keeps:
+  // a trial the update refuses needs its cost alone.
+  void linearise(Linearisation* at) const {
+    measurement.system(points, at->projection, weights, &at->system);
   }
   // Minus half the cost's gradient at a state, the way down: R^-1 H^T r - P^-1 (x - x_prior).
   Vector6d gradient(const Linearisation& at) const {
-    return inv_r * Eigen::Map<const Vector6d>(at.sums.Htr) - at.prior_pull;
+    return Eigen::Map<const Vector6d>(at.system.weighted_Htr) - at.prior_pull;
   }
 };
 
@@ -195,11 +192,13 @@ MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& pr
   } else {
     prior_information = lower_triangle(inverse_spd(covariance));
   }
+  const double inv_r = 1.0 / (options.measurement_sigma_px * options.measurement_sigma_px);
   return {EkfPoints(c),
           detail::ekf_measurement(set),
           state_from_pose(prior),
           prior_information,
-          1.0 / (options.measurement_sigma_px * options.measurement_sigma_px),
+          inv_r,
+          detail::SystemWeights(prior_information, inv_r),
           prior_information.is_diagonal()};
 }
 
@@ -298,9 +297,10 @@ inline Updates run_updates(const MapCost& map, const EkfOptions& options, Linear
   Damping damping;
   for (int it = 1; it <= options.max_iterations; ++it) {
     u.iterations = it;
-    u.information = map.information(*at);
+    const Symmetric6& information = at->system.information;
+    u.information = information;
     const Vector6d gradient = map.gradient(*at);
-    const DampedStep d = damped_step(map, u.x, *at, u.information, gradient, &damping, next);
+    const DampedStep d = damped_step(map, u.x, *at, information, gradient, &damping, next);
     if (d.singular) {
       u.termination = Termination::kNumericalFailure;
       return u;
