@@ -93,10 +93,10 @@ inline void small_step_trig(const detail::Lanes& s, detail::Lanes* sin_s,
 // (tests/vision/pose_ekf_reference_test.cpp). A step beyond 4 rad takes the
 // sine and cosine of the new angle itself. About twenty vector multiply-adds
 // for the three angles, against about 130 instructions for each of glibc's
-// sincos (callgrind): the update is bound by its floating-point operations
-// as much as by its chain (96 independent multiply-adds added to a trial
-// cost it ~60 cycles), so the three lanes at once took about 2 % off a solve
-// and the large steps without libm another 5 % (ABBA runs of bench_solvers).
+// sincos (callgrind). Floating-point work costs the update time even off
+// its chain (96 independent multiply-adds added to a trial cost it ~60
+// cycles): the three lanes at once took about 2 % off a solve and the large
+// steps without libm another 5 % (ABBA runs of bench_solvers).
 inline EulerTrig euler_trig_after(const EulerTrig& at, const Vector6d& step, const Vector6d& next) {
   const detail::Lanes s = {step(0), step(1), step(2), 0.0};
   const double largest = step.head<3>().cwiseAbs().maxCoeff();
@@ -145,14 +145,15 @@ struct Linearisation {
 };
 
 // The filter's MAP cost, which the update minimises:
-//   inv_r |z - h(x)|^2 + (x - x_prior)^T P^-1 (x - x_prior).
+//   R^-1 |z - h(x)|^2 + (x - x_prior)^T P^-1 (x - x_prior).
 struct MapCost {
   EkfPoints points;
   detail::EkfMeasurement measurement;
   Vector6d x_prior;
-  Symmetric6 prior_information;   // P^-1
-  double inv_r;                   // R^-1 = 1 / sigma^2, px^-2
-  detail::SystemWeights weights;  // the two in the layout the measurement adds them in
+  Symmetric6 prior_information;  // P^-1
+  // R^-1 = 1 / sigma^2 (px^-2, weights.inv_r) and P^-1 again, in the lanes
+  // the measurement adds it to.
+  detail::SystemWeights weights;
   // P^-1 has exact zeros off its diagonal (the nominal prior, the analytic
   // start): its product with a state difference is then the diagonal's, which
   // gives the same bits without the 30 products by zero (callgrind: 86.8k
@@ -166,7 +167,7 @@ struct MapCost {
     const Vector6d d = state_difference(state, x_prior);
     at->prior_pull = prior_is_diagonal ? Vector6d(prior_information.diagonal().cwiseProduct(d))
                                        : prior_information * d;
-    at->cost = inv_r * at->projection.residual_squared + d.dot(at->prior_pull);
+    at->cost = weights.inv_r * at->projection.residual_squared + d.dot(at->prior_pull);
     return true;
   }
   // The update's system at a state evaluate() has costed (its information
@@ -197,7 +198,6 @@ MapCost map_cost(const Correspondences& c, const Pose& prior, const Matrix6d& pr
           detail::ekf_measurement(set),
           state_from_pose(prior),
           prior_information,
-          inv_r,
           detail::SystemWeights(prior_information, inv_r),
           prior_information.is_diagonal()};
 }
