@@ -38,6 +38,21 @@ TEST(Codebook, SizeFallsWithTheMinimumDistanceAsDocumented) {
   }
 }
 
+// The distance counts the differing bits of every pair: checked against a
+// bit-by-bit count for each of the 65,536 differences (a ^ b), from both
+// sides of a pair and against a second operand that is not zero.
+TEST(Codebook, HammingDistanceCountsTheDifferingBitsOfEveryPair) {
+  for (unsigned diff = 0; diff <= 0xFFFF; ++diff) {
+    int bits = 0;
+    for (int k = 0; k < 16; ++k)
+      bits += (diff >> k) & 1;
+    const auto a = static_cast<uint16_t>(0xA5C3u ^ diff);
+    ASSERT_EQ(Codebook::hamming_distance(static_cast<uint16_t>(diff), 0), bits) << diff;
+    ASSERT_EQ(Codebook::hamming_distance(a, 0xA5C3u), bits) << diff;
+    ASSERT_EQ(Codebook::hamming_distance(0xA5C3u, a), bits) << diff;
+  }
+}
+
 TEST(Codebook, EveryRotatedCodeIsAtLeastTheMinimumDistanceFromEveryOther) {
   for (int d : {3, 5}) {
     const Codebook book(CodebookOptions{d, -1});

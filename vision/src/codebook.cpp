@@ -2,7 +2,6 @@
 #include "vision/codebook.hpp"
 
 #include <array>
-#include <bitset>
 #include <stdexcept>
 #include <string>
 
@@ -99,7 +98,15 @@ bool Codebook::marker_cell_is_white(uint16_t bits, int row, int col) {
 }
 
 int Codebook::hamming_distance(uint16_t a, uint16_t b) {
-  return static_cast<int>(std::bitset<16>(static_cast<unsigned>(a ^ b)).count());
+  // The bits set in a ^ b, counted in parallel (pairs, nibbles, bytes): a
+  // few integer operations inline, where std::bitset::count is a libgcc call
+  // on x86-64 builds without POPCNT, and decode() makes up to 4 * size() of
+  // them a candidate.
+  unsigned x = static_cast<unsigned>(a ^ b);
+  x -= (x >> 1) & 0x5555u;
+  x = (x & 0x3333u) + ((x >> 2) & 0x3333u);
+  x = (x + (x >> 4)) & 0x0F0Fu;
+  return static_cast<int>((x + (x >> 8)) & 0x1Fu);
 }
 
 }  // namespace vision

@@ -55,6 +55,14 @@ struct SideFit {
   int inliers = 0;
 };
 
+// std::llround(v) for |v| < 2^63, inline (std::llround is a libm call, four
+// of them a profile): v - trunc(v) is exact, so the half-way test is too.
+std::int64_t round_half_away(double v) {
+  const auto whole = static_cast<std::int64_t>(v);
+  const double fraction = v - static_cast<double>(whole);
+  return fraction >= 0.5 ? whole + 1 : fraction <= -0.5 ? whole - 1 : whole;
+}
+
 // Reads the profile through `centre` along `normal` (image, unit, outward) at
 // offsets -inner .. +outer, bilinearly interpolated (sample_bilinear's
 // convention). The samples lie on a line at a constant step, so the position
@@ -71,10 +79,10 @@ void read_profile(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eige
   const Eigen::Vector2d start = centre - inner * normal;
   // Half a weight unit ahead, so that truncating to 16 bits rounds.
   constexpr std::int64_t kHalfWeight = std::int64_t{1} << 15;
-  std::int64_t x = std::llround(start.x() * kOne) + kHalfWeight;
-  std::int64_t y = std::llround(start.y() * kOne) + kHalfWeight;
-  const std::int64_t dx = std::llround(kProfileStepPx * normal.x() * kOne);
-  const std::int64_t dy = std::llround(kProfileStepPx * normal.y() * kOne);
+  std::int64_t x = round_half_away(start.x() * kOne) + kHalfWeight;
+  std::int64_t y = round_half_away(start.y() * kOne) + kHalfWeight;
+  const std::int64_t dx = round_half_away(kProfileStepPx * normal.x() * kOne);
+  const std::int64_t dy = round_half_away(kProfileStepPx * normal.y() * kOne);
   const std::int64_t last_col = gray.cols - 2, last_row = gray.rows - 2;
   const std::size_t stride = gray.step[0];
   const std::uint8_t* const data = gray.data;
