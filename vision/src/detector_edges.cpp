@@ -55,7 +55,7 @@ struct SideFit {
   int inliers = 0;
 };
 
-// std::llround(v) for |v| < 2^63, inline (std::llround is a libm call, four
+// std::llround(v) for |v| < 2^63, inline (std::llround is a libm call, five
 // of them a profile): v - trunc(v) is exact, so the half-way test is too.
 std::int64_t round_half_away(double v) {
   const auto whole = static_cast<std::int64_t>(v);
@@ -73,7 +73,7 @@ std::int64_t round_half_away(double v) {
 // (edge_window).
 void read_profile(const cv::Mat& gray, const Eigen::Vector2d& centre, const Eigen::Vector2d& normal,
                   double inner, double outer, std::vector<double>* values) {
-  const int n = static_cast<int>(std::lround((inner + outer) / kProfileStepPx)) + 1;
+  const int n = static_cast<int>(round_half_away((inner + outer) / kProfileStepPx)) + 1;
   values->resize(n);
   constexpr double kOne = 4294967296.0;  // 2^32
   const Eigen::Vector2d start = centre - inner * normal;
@@ -239,7 +239,7 @@ bool locate_edge(const cv::Mat& gray, const Eigen::Vector2d& px, const Eigen::Ve
   // long as it spans the edge), so when it lies inside the wide profile its
   // samples are the profile's own and nothing is read twice.
   const int centre = best + 1;
-  const int half = static_cast<int>(std::lround(p.edge_refine_px / kProfileStepPx));
+  const int half = static_cast<int>(round_half_away(p.edge_refine_px / kProfileStepPx));
   const double s_peak = -inner + centre * kProfileStepPx;
   if (centre - half >= 0 && centre + half < static_cast<int>(profile.size())) {
     const bool ok = equal_area_edge(profile.data() + (centre - half), 2 * half + 1,
