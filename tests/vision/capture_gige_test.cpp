@@ -53,6 +53,13 @@ class FakeCameraProcess {
   }
   ~FakeCameraProcess() { kill(); }
   bool started() const { return pid_ > 0; }
+  // Stops the simulator (SIGSTOP) for `duration`, then lets it go on: it
+  // hears nothing meanwhile, as a camera on a link that drops every packet.
+  void pause(std::chrono::milliseconds duration) {
+    ::kill(pid_, SIGSTOP);
+    std::this_thread::sleep_for(duration);
+    ::kill(pid_, SIGCONT);
+  }
   void kill() {
     if (pid_ <= 0) return;
     ::kill(pid_, SIGKILL);
@@ -207,6 +214,48 @@ TEST_F(GigeFakeCamera, CameraKilledMidStreamIsACaptureErrorNotAFrame) {
     EXPECT_NE(std::string(e.what()).find("gige:127.0.0.1"), std::string::npos) << e.what();
   }
   EXPECT_EQ(source.counters().delivered, 1u);
+}
+
+TEST_F(GigeFakeCamera, ACameraThatMissedTheHeartbeatTakesControlAwayAndTheNextSourceGetsIt) {
+  vision::CaptureOptions options;
+  options.width = 64;
+  options.height = 48;
+  options.retries = 0;
+  vision::GigeSource source(kAddress, options);
+  source.open();
+  source.trigger();
+  ASSERT_FALSE(source.grab(kFrameWait).image.empty());
+  // The simulator keeps the GigE Vision default heartbeat timeout, 3 s: it
+  // hears nothing for 4 s, so the first packet it handles afterwards finds
+  // the controller's heartbeat expired and takes its control away
+  // (arvgvfakecamera.c); Aravis's heartbeat (a read of the privilege
+  // register once a second) then finds it gone.
+  camera_.pause(4000ms);
+  // Until that read, a grab sees no frame (CaptureTimeout). The deadline
+  // only bounds a broken test: the read comes within seconds.
+  bool lost = false;
+  const auto deadline = std::chrono::steady_clock::now() + 60s;
+  while (!lost && std::chrono::steady_clock::now() < deadline) {
+    try {
+      source.trigger();
+      source.grab(200ms);
+      ADD_FAILURE() << "a frame after the camera's heartbeat expired";
+      break;
+    } catch (const vision::CaptureControlLost& e) {
+      lost = true;
+      EXPECT_NE(std::string(e.what()).find("gige:127.0.0.1: control of the camera lost"),
+                std::string::npos)
+          << e.what();
+    } catch (const vision::CaptureTimeout&) {
+    }
+  }
+  EXPECT_TRUE(lost);
+  source.close();
+  // The camera is free again: a new source takes control and gets frames.
+  vision::GigeSource next(kAddress, options);
+  next.open();
+  next.trigger();
+  EXPECT_FALSE(next.grab(kFrameWait).image.empty());
 }
 
 TEST(GigeSource, AbsentCameraIsACaptureErrorNamingTheAddress) {

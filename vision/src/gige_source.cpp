@@ -279,8 +279,9 @@ struct GigeSource::Impl {
   // A trigger was sent and its frame has not been delivered yet: only then
   // does a grab that times out trigger again.
   bool trigger_pending = false;
-  // The camera stopped answering control commands: close() then does not wait
-  // for it to acknowledge AcquisitionStop.
+  // The camera stopped answering control commands, or no longer takes them
+  // from us (control lost): close() then does not wait for it to acknowledge
+  // AcquisitionStop.
   bool unreachable = false;
   bool has_last_id = false;
   uint64_t last_id = 0;
@@ -430,7 +431,9 @@ Frame GigeSource::grab(std::chrono::milliseconds timeout) {
         arv_stream_timeout_pop_buffer(impl_->stream, static_cast<guint64>(timeout.count()) * 1000);
     if (impl_->control_lost.load()) {
       impl_->unreachable = true;
-      throw CaptureError(who, "control of the camera lost (no heartbeat answer): camera gone?");
+      throw CaptureControlLost(who,
+                               "control of the camera lost: it stopped hearing this "
+                               "controller's heartbeat in time, or another application took it");
     }
     if (buffer == nullptr) {
       ++counters_.timeouts;

@@ -7,6 +7,7 @@ namespace rig::sweep {
 
 bool camera_may_be_held(const vision::CaptureError& error) {
   return dynamic_cast<const vision::CaptureTimeout*>(&error) != nullptr ||
+         dynamic_cast<const vision::CaptureControlLost*>(&error) != nullptr ||
          std::string(error.what()).find(" refused") != std::string::npos;
 }
 

@@ -77,8 +77,18 @@ TEST(CameraMayBeHeld, TimeoutsAndRefusalsAreWorthAskingAgainAnAbsentCameraIsNot)
   EXPECT_TRUE(rig::sweep::camera_may_be_held(vision::CaptureTimeout("gige:x", "no frame")));
   EXPECT_TRUE(
       rig::sweep::camera_may_be_held(vision::CaptureError("gige:x", "PixelFormat refused: busy")));
+  EXPECT_TRUE(rig::sweep::camera_may_be_held(
+      vision::CaptureControlLost("gige:x", "control of the camera lost")));
   EXPECT_FALSE(rig::sweep::camera_may_be_held(
       vision::CaptureError("gige:x", "no GigE Vision camera answers (timeout)")));
+}
+
+TEST_F(SweepCameraTest, ACameraThatTookControlAwayIsAskedAgain) {
+  scripts_ = {{[] { throw vision::CaptureControlLost("gige:127.0.0.1", "control lost"); }},
+              Script{}};
+  EXPECT_NE(open({10s, 1ms}), nullptr);
+  EXPECT_EQ(attempts_, 2);
+  EXPECT_EQ(retries_, (std::vector<int>{1}));
 }
 
 TEST_F(SweepCameraTest, AHeldCameraIsAskedAgainUntilItAnswers) {

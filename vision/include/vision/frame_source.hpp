@@ -13,8 +13,9 @@
 // Errors. CaptureError names the device and what failed (absent device, a
 // device that is not a camera, a transport failure, a frame still incomplete
 // after the configured retries). CaptureTimeout is the CaptureError of a grab
-// that saw no frame within its timeout. Both are thrown where the cause is
-// known; counters() tells how many frames went wrong on the way.
+// that saw no frame within its timeout; CaptureControlLost that of a camera
+// that took its control away from this source. All are thrown where the
+// cause is known; counters() tells how many frames went wrong on the way.
 #pragma once
 
 #include <chrono>
@@ -41,6 +42,15 @@ class CaptureError : public std::runtime_error {
 
 // No frame within the timeout of grab() (after the configured retries).
 class CaptureTimeout : public CaptureError {
+ public:
+  using CaptureError::CaptureError;
+};
+
+// The camera took control away from this source: it stopped hearing the
+// source's heartbeat for its heartbeat timeout (a host or camera that stalled
+// that long, a link that dropped the heartbeats) or handed control to another
+// application. The camera still answers; a new source may take it again.
+class CaptureControlLost : public CaptureError {
  public:
   using CaptureError::CaptureError;
 };

@@ -41,6 +41,9 @@ class GigeSource final : public FrameSource {
   // Software trigger mode: drops any frame already queued (it was not asked
   // for) and sends TriggerSoftware. Free run: drops queued frames only.
   void trigger() override;
+  // Throws CaptureControlLost once the camera has taken control away
+  // (Aravis's heartbeat found this controller's privilege gone); the source
+  // must then be closed and opened again.
   Frame grab(std::chrono::milliseconds timeout) override;
   void close() override;
 

@@ -33,8 +33,11 @@ struct HeldCameraPolicy {
 
 // Whether a failure to open or read a camera may be a camera held by another
 // controller, worth asking again: no frame in time (vision::CaptureTimeout),
-// or a camera that answers but refuses a setting (" refused" in the message,
-// vision::GigeSource). A camera that does not answer at all is absent.
+// a camera that answers but refuses a setting (" refused" in the message,
+// vision::GigeSource), or one that took control away again right after
+// granting it (vision::CaptureControlLost: the camera missed this
+// controller's heartbeats for its timeout, on a host or camera that stalled
+// while loaded). A camera that does not answer at all is absent.
 bool camera_may_be_held(const vision::CaptureError& error);
 
 // One frame before anything moves: triggers and grabs one frame of an open
