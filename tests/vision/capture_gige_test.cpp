@@ -20,6 +20,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
@@ -102,6 +103,18 @@ class GigeFakeCamera : public ::testing::Test {
   void SetUp() override {
     ASSERT_TRUE(camera_.started()) << "arv-fake-gv-camera-0.8 not found (package aravis-tools)";
     ASSERT_TRUE(camera_.wait_ready()) << "arv-fake-gv-camera-0.8 did not answer on " << kAddress;
+  }
+  // A 64 x 48 source at kAddress, open, that has delivered one frame.
+  static std::unique_ptr<vision::GigeSource> small_source_with_a_frame(int retries) {
+    vision::CaptureOptions options;
+    options.width = 64;
+    options.height = 48;
+    options.retries = retries;
+    auto source = std::make_unique<vision::GigeSource>(kAddress, options);
+    source->open();
+    source->trigger();
+    EXPECT_FALSE(source->grab(kFrameWait).image.empty());
+    return source;
   }
   FakeCameraProcess camera_;
 };
@@ -197,14 +210,8 @@ TEST_F(GigeFakeCamera, FreeRunStreamsWithoutLostFrames) {
 }
 
 TEST_F(GigeFakeCamera, CameraKilledMidStreamIsACaptureErrorNotAFrame) {
-  vision::CaptureOptions options;
-  options.width = 64;
-  options.height = 48;
-  options.retries = 1;
-  vision::GigeSource source(kAddress, options);
-  source.open();
-  source.trigger();
-  ASSERT_FALSE(source.grab(kFrameWait).image.empty());
+  const auto source_ptr = small_source_with_a_frame(1);
+  vision::GigeSource& source = *source_ptr;
   camera_.kill();
   try {
     source.trigger();
@@ -217,14 +224,8 @@ TEST_F(GigeFakeCamera, CameraKilledMidStreamIsACaptureErrorNotAFrame) {
 }
 
 TEST_F(GigeFakeCamera, ACameraThatMissedTheHeartbeatTakesControlAwayAndTheNextSourceGetsIt) {
-  vision::CaptureOptions options;
-  options.width = 64;
-  options.height = 48;
-  options.retries = 0;
-  vision::GigeSource source(kAddress, options);
-  source.open();
-  source.trigger();
-  ASSERT_FALSE(source.grab(kFrameWait).image.empty());
+  const auto source_ptr = small_source_with_a_frame(0);
+  vision::GigeSource& source = *source_ptr;
   // The simulator keeps the GigE Vision default heartbeat timeout, 3 s: it
   // hears nothing for 4 s, so the first packet it handles afterwards finds
   // the controller's heartbeat expired and takes its control away
@@ -251,11 +252,8 @@ TEST_F(GigeFakeCamera, ACameraThatMissedTheHeartbeatTakesControlAwayAndTheNextSo
   }
   EXPECT_TRUE(lost);
   source.close();
-  // The camera is free again: a new source takes control and gets frames.
-  vision::GigeSource next(kAddress, options);
-  next.open();
-  next.trigger();
-  EXPECT_FALSE(next.grab(kFrameWait).image.empty());
+  // The camera is free again: a new source takes control and gets a frame.
+  small_source_with_a_frame(0);
 }
 
 TEST(GigeSource, AbsentCameraIsACaptureErrorNamingTheAddress) {
