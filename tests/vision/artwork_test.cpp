@@ -6,12 +6,12 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <sstream>
 #include <string>
 
 #include "file_bytes.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace vision {
 namespace {
@@ -58,7 +58,7 @@ TEST(Artwork, PngMarkerHasThePixelSizeOfItsDpi) {
   MarkerArtworkOptions o;
   o.dpi = 300;
   write_marker_artwork(Codebook(), 1, o, path);
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  const cv::Mat image = vision::imread(path, cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(image.empty());
   const int expected = static_cast<int>(std::lround(kPageMm / 25.4 * 300));  // 787 px
   EXPECT_EQ(image.cols, expected);
@@ -74,7 +74,7 @@ TEST(Artwork, PngMarkerCellsReadBackAsTheCodebookBits) {
   for (int id : {0, 7, 34}) {
     const std::string path = temp_path("marker_bits.png");
     write_marker_artwork(book, id, MarkerArtworkOptions{}, path);
-    const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+    const cv::Mat image = vision::imread(path, cv::IMREAD_GRAYSCALE);
     ASSERT_FALSE(image.empty());
     for (int row = 0; row < kMarkerCells; ++row) {
       for (int col = 0; col < kMarkerCells; ++col) {
@@ -99,7 +99,7 @@ TEST(Artwork, PngMarkerCellsReadBackAsTheCodebookBits) {
 TEST(Artwork, LabelStaysInTheOuterPartOfTheQuietZone) {
   const std::string path = temp_path("marker_label.png");
   write_marker_artwork(Codebook(), 5, MarkerArtworkOptions{}, path);
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  const cv::Mat image = vision::imread(path, cv::IMREAD_GRAYSCALE);
   const int cell_px = static_cast<int>(50.0 / 6 / 25.4 * 600);
   const int border_bottom = image.rows - cell_px;
   double darkest = 255;
@@ -116,7 +116,7 @@ TEST(Artwork, PaperTargetSheetIsA4WithEveryMarkerWhereTheLayoutSaysAt150Dpi) {
   TargetArtworkOptions o;
   o.dpi = 150;
   write_target_artwork(book, target, o, path);
-  const cv::Mat image = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  const cv::Mat image = vision::imread(path, cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(image.empty());
   const double px_per_mm = 150 / 25.4;
   EXPECT_EQ(image.cols, std::lround(210 * px_per_mm));

@@ -3,10 +3,10 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 
 #include "vision/frame_source.hpp"
+#include "vision/image_codecs.hpp"
 #include "vision/replay_source.hpp"
 
 namespace {
@@ -26,7 +26,7 @@ class ReplayFolder : public ::testing::Test {
   void TearDown() override { fs::remove_all(dir_); }
   // An image whose every pixel is `value`, so the order can be read back.
   void write_image(const std::string& name, uint8_t value) {
-    cv::imwrite((dir_ / name).string(), cv::Mat(12, 16, CV_8UC1, cv::Scalar(value)));
+    vision::imwrite((dir_ / name).string(), cv::Mat(12, 16, CV_8UC1, cv::Scalar(value)));
   }
   fs::path dir_;
 };

@@ -4,13 +4,13 @@
 
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "detector_frames.hpp"
 #include "detector_synthetic.hpp"
 #include "vision/detector.hpp"
 #include "vision/detector_image.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -164,7 +164,7 @@ TEST_F(DetectorInput, ReadImageNamesAnEmptyFile) {
 TEST_F(DetectorInput, ReadImageNamesTruncatedPngAndJpeg) {
   for (const std::string ext : {".png", ".jpg"}) {
     std::vector<uchar> bytes;
-    ASSERT_TRUE(cv::imencode(ext, *frame_, bytes));
+    ASSERT_TRUE(vision::imencode(ext, *frame_, bytes));
     bytes.resize(bytes.size() / 2);
     const fs::path p = temp_dir() / ("truncated" + ext);
     write_bytes(p, bytes);
@@ -188,8 +188,8 @@ TEST_F(DetectorInput, ReadImageKeepsSixteenBitsAndColour) {
   frame_->convertTo(wide, CV_16U, 16.0);
   cv::cvtColor(*frame_, bgr, cv::COLOR_GRAY2BGR);
   const fs::path p16 = temp_dir() / "wide.png", pc = temp_dir() / "colour.png";
-  ASSERT_TRUE(cv::imwrite(p16.string(), wide));
-  ASSERT_TRUE(cv::imwrite(pc.string(), bgr));
+  ASSERT_TRUE(vision::imwrite(p16.string(), wide));
+  ASSERT_TRUE(vision::imwrite(pc.string(), bgr));
   const cv::Mat r16 = vision::read_image(p16.string());
   EXPECT_EQ(r16.type(), CV_16UC1);
   EXPECT_EQ(detect(r16).size(), 4u);

@@ -3,12 +3,12 @@
 
 #include <array>
 #include <cstdint>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "vision/detector_image.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -66,8 +66,8 @@ TEST(ImageHeader, EveryFormatDeclaresWhatItDecodesTo) {
                {".bmp", &grey},   {".bmp", &colour}};
   for (const auto& c : cases) {
     Bytes bytes;
-    ASSERT_TRUE(cv::imencode(c.ext, *c.image, bytes)) << c.ext;
-    const cv::Mat decoded = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+    ASSERT_TRUE(vision::imencode(c.ext, *c.image, bytes)) << c.ext;
+    const cv::Mat decoded = vision::imdecode(bytes, cv::IMREAD_UNCHANGED);
     const std::string what = std::string(c.ext) + " of type " + std::to_string(c.image->type());
     ASSERT_FALSE(decoded.empty()) << what;
     const vision::ImageHeader h = vision::read_image_header(bytes.data(), bytes.size(), what);
@@ -91,7 +91,7 @@ TEST(ImageHeader, AFileDeclaringMoreThanTheLimitIsRefusedBeforeDecoding) {
   Bytes bomb;
   {
     const cv::Mat zeros(16400, 16400, CV_8UC1, cv::Scalar(0));
-    ASSERT_TRUE(cv::imencode(".png", zeros, bomb));
+    ASSERT_TRUE(vision::imencode(".png", zeros, bomb));
   }
   ASSERT_GT(16400LL * 16400, vision::kMaxImagePixels);
   try {

@@ -16,13 +16,13 @@
 #include <map>
 #include <memory>
 #include <opencv2/aruco.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "vision/artwork.hpp"
 #include "vision/camera.hpp"
 #include "vision/codebook.hpp"
 #include "vision/detector.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace vision {
 namespace {
@@ -192,7 +192,7 @@ TEST(MarkerFamily, PrintedTargetOfEachFamilyHoldsItsFourMarkers) {
     const std::string path =
         (std::filesystem::temp_directory_path() / "rig_marker_family_target.png").string();
     write_target_artwork(target, TargetArtworkOptions{100.0, true}, path);
-    std::vector<int> ids = detectors.at(name)(cv::imread(path, cv::IMREAD_GRAYSCALE));
+    std::vector<int> ids = detectors.at(name)(vision::imread(path, cv::IMREAD_GRAYSCALE));
     std::sort(ids.begin(), ids.end());
     EXPECT_EQ(ids, (std::vector<int>{0, 1, 2, 3})) << name;
     std::filesystem::remove(path);

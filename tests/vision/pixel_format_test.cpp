@@ -7,9 +7,10 @@
 
 #include <cmath>
 #include <functional>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
+
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -198,7 +199,7 @@ TEST(V4l2PixelFormat, MjpegDecodesWithinItsQuantizationError) {
   cv::rectangle(pattern, cv::Rect(8, 8, 16, 16), cv::Scalar(10), cv::FILLED);
   cv::rectangle(pattern, cv::Rect(40, 4, 6, 40), cv::Scalar(240), cv::FILLED);
   std::vector<uint8_t> jpeg;
-  ASSERT_TRUE(cv::imencode(".jpg", pattern, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}));
+  ASSERT_TRUE(vision::imencode(".jpg", pattern, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}));
   const cv::Mat image =
       vision::v4l2_buffer_to_image(jpeg.data(), jpeg.size(), 64, 48, 0, fourcc::kMjpeg);
   ASSERT_EQ(image.type(), CV_8UC1);
@@ -226,7 +227,7 @@ TEST(V4l2PixelFormat, BadBuffersAreErrorsNamingTheFourcc) {
   EXPECT_NE(message.find("NV12"), std::string::npos) << message;
   cv::Mat small(4, 4, CV_8UC1, cv::Scalar(128));
   std::vector<uint8_t> jpeg;
-  cv::imencode(".jpg", small, jpeg);
+  vision::imencode(".jpg", small, jpeg);
   message = error_of(
       [&] { vision::v4l2_buffer_to_image(jpeg.data(), jpeg.size(), 8, 8, 0, fourcc::kMjpeg); });
   EXPECT_NE(message.find("JPEG declares 4 x 4 pixels"), std::string::npos) << message;

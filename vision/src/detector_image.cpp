@@ -5,8 +5,9 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
-#include <opencv2/imgcodecs.hpp>
 #include <vector>
+
+#include "vision/image_codecs.hpp"
 
 namespace vision {
 namespace {
@@ -45,7 +46,7 @@ cv::Mat decode_image(const std::uint8_t* data, std::size_t size, int imread_flag
   try {
     // A header over the bytes, not a copy: imdecode only reads them.
     const cv::Mat bytes(1, static_cast<int>(size), CV_8UC1, const_cast<std::uint8_t*>(data));
-    image = cv::imdecode(bytes, imread_flags);
+    image = vision::imdecode(bytes, imread_flags);
   } catch (const cv::Exception& e) {
     throw ImageError(name + ": cannot be decoded: " + e.what());
   }

@@ -3,11 +3,11 @@
 
 #include <cstdio>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <vector>
 
 #include "vision/detector_image.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace vision {
 namespace {
@@ -163,7 +163,7 @@ cv::Mat v4l2_buffer_to_image(const void* data, size_t used, int width, int heigh
       throw PixelFormatError(std::string(e.what()) + " (the buffer does not decode as a JPEG)");
     }
     const cv::Mat bytes(1, static_cast<int>(used), CV_8UC1, const_cast<uint8_t*>(in));
-    cv::Mat gray = cv::imdecode(bytes, cv::IMREAD_GRAYSCALE);
+    cv::Mat gray = vision::imdecode(bytes, cv::IMREAD_GRAYSCALE);
     if (gray.empty()) throw PixelFormatError(who + ": the buffer does not decode as a JPEG");
     return gray;
   }

@@ -6,12 +6,12 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
 
 #include "commands.hpp"
 #include "vision/frame_source.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace rig::cli {
 namespace {
@@ -45,7 +45,7 @@ int save_frames(const CaptureArgs& args, vision::FrameSource& source) {
       const double ms =
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
       const std::string path = (std::filesystem::path(args.out) / frame_file(i)).string();
-      if (!cv::imwrite(path, frame.image)) throw std::runtime_error("cannot write " + path);
+      if (!vision::imwrite(path, frame.image)) throw std::runtime_error("cannot write " + path);
       ++saved;
       std::cout << path << "  " << frame.image.cols << "x" << frame.image.rows << "  id "
                 << frame.frame_id << "  camera_ts_ns " << frame.camera_timestamp_ns << "  " << ms

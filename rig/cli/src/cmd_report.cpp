@@ -17,7 +17,6 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <optional>
 #include <string>
@@ -29,6 +28,7 @@
 #include "db/store/store.hpp"
 #include "report_truth.hpp"
 #include "vision/detector_image.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace rig::cli {
 namespace {
@@ -112,7 +112,7 @@ std::optional<db::report::FramePicture> draw_frame(const db::store::FrameRecord&
                            static_cast<int>(std::lround(d.corners_px[2 * c + 1] * scale))),
                  2, kDetectionColour, cv::FILLED, cv::LINE_8);
   std::vector<unsigned char> png;
-  if (!cv::imencode(".png", picture, png)) return std::nullopt;
+  if (!vision::imencode(".png", picture, png)) return std::nullopt;
   db::report::FramePicture p;
   p.frame = which;
   p.png.assign(png.begin(), png.end());

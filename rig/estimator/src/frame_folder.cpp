@@ -6,9 +6,10 @@
 
 #include <cerrno>
 #include <cstring>
-#include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <vector>
+
+#include "vision/image_codecs.hpp"
 
 namespace rig::estimator {
 
@@ -29,7 +30,7 @@ std::string FrameFolder::write(const cv::Mat& image) {
     folder_ = pattern;
   }
   std::vector<unsigned char> png;
-  if (!cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 0}))
+  if (!vision::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 0}))
     throw std::runtime_error("cannot encode the frame as PNG for the external estimators");
   const std::filesystem::path file = *folder_ / "frame.png";
   if (::unlink(file.c_str()) == -1 && errno != ENOENT)

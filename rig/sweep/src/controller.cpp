@@ -5,7 +5,6 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 #include <optional>
 #include <set>
 #include <thread>
@@ -20,6 +19,7 @@
 #include "rig/sweep/ground_truth.hpp"
 #include "rig/sweep/sweep_camera.hpp"
 #include "run_log.hpp"
+#include "vision/image_codecs.hpp"
 #include "vision/timing.hpp"
 
 namespace rig::sweep {
@@ -482,7 +482,7 @@ class PositionMeasurer {
     const std::filesystem::path file =
         *frames_folder_ / ("p" + std::to_string(index) + "_f" + std::to_string(k) + ".png");
     std::vector<unsigned char> png;
-    if (!cv::imencode(".png", image, png))
+    if (!vision::imencode(".png", image, png))
       throw RunEnd{db::store::RunStatus::kFailed,
                    "cannot encode frame as PNG for " + file.string()};
     const std::string_view bytes(reinterpret_cast<const char*>(png.data()), png.size());

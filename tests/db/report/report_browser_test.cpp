@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <opencv2/imgcodecs.hpp>
 #include <regex>
 #include <set>
 
@@ -12,6 +11,7 @@
 #include "db/report/report.hpp"
 #include "store_fixture.hpp"
 #include "synthetic_run.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -76,7 +76,7 @@ TEST(ReportBrowser, TenSolversAt1400PixelsFitWithDistinctColours) {
   std::vector<db::report::FramePicture> pictures;
   for (const db::report::FrameToShow& f : report.frames_to_show()) {
     std::vector<unsigned char> png;
-    ASSERT_TRUE(cv::imencode(".png", cv::Mat(279, 360, CV_8UC3, cv::Scalar(90, 90, 90)), png));
+    ASSERT_TRUE(vision::imencode(".png", cv::Mat(279, 360, CV_8UC3, cv::Scalar(90, 90, 90)), png));
     pictures.push_back({f, std::string(png.begin(), png.end()), 360, 279, 0.49, "grey"});
   }
   ASSERT_GE(pictures.size(), 10u);

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <opencv2/imgcodecs.hpp>
 
 #include "db/store/sha256.hpp"
 #include "db/store/store.hpp"
@@ -14,6 +13,7 @@
 #include "synthetic_calibration.hpp"
 #include "vision/codebook.hpp"
 #include "vision/detector.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace rig_test {
 
@@ -112,7 +112,7 @@ std::int64_t write_sim_truth_run(const SimTruthSweep& sweep, const std::string& 
     const std::string path = frames_dir + "/p" + std::to_string(where.plan_index) + "_f" +
                              std::to_string(frame.index) + ".png";
     std::vector<std::uint8_t> png;
-    cv::imencode(".png", sweep.images[i], png);
+    vision::imencode(".png", sweep.images[i], png);
     const std::string bytes(png.begin(), png.end());
     std::ofstream(path, std::ios::binary) << bytes;
     frame.image_path = path;

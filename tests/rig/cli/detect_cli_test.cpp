@@ -4,16 +4,17 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <set>
 #include <sstream>
 
 #include "rig_command.hpp"
 #include "sim/scene/renderer.hpp"
+#include "vision/image_codecs.hpp"
 #include "vision/solvers.hpp"
 
 namespace {
@@ -45,7 +46,7 @@ class RigDetect : public ::testing::Test {
     pose_->R = Eigen::Matrix3d(Eigen::AngleAxisd(0.3, Eigen::Vector3d(1, 0.5, 0).normalized()));
     pose_->t = Eigen::Vector3d(0.01, 0.0, 0.5);
     image_ = new cv::Mat(renderer.render(*pose_, 3).image);
-    cv::imwrite(path("frame.png"), *image_);
+    vision::imwrite(path("frame.png"), *image_);
   }
   static void TearDownTestSuite() {
     fs::remove_all(*dir_);
@@ -97,6 +98,23 @@ TEST_F(RigDetect, PrintsDetectionsAndEveryEstimateInThePublicJsonShape) {
 
 // Corners within ~0.01 px give the distance within 0.01 % at 0.5 m; 0.05 %
 // leaves room for the solver's own tolerance.
+// The image codecs (vision/image_codecs.hpp) are loaded to read an image,
+// not when rig starts: `rig solve` reads no image and never loads them. The
+// dynamic loader names each library it loads when LD_DEBUG=files.
+TEST_F(RigDetect, LoadsTheImageCodecsOnlyToReadAnImage) {
+  ASSERT_EQ(::setenv("LD_DEBUG", "files", 1), 0);
+  const rig_test::RigRun solve = rig_test::run_rig("solve " + std::string(RIG_SOURCE_DIR) +
+                                                   "/config/problems/paper_marker.json");
+  const rig_test::RigRun detect = run(path("frame.png"));
+  ASSERT_EQ(::unsetenv("LD_DEBUG"), 0);
+  ASSERT_EQ(solve.exit_code, 0) << solve.err;
+  ASSERT_EQ(detect.exit_code, 0) << detect.err;
+  // The trace is there (the core library is linked), the codecs are not in it.
+  EXPECT_NE(solve.err.find("file=libopencv_core"), std::string::npos) << solve.err.substr(0, 600);
+  EXPECT_EQ(solve.err.find("libopencv_imgcodecs"), std::string::npos);
+  EXPECT_NE(detect.err.find("file=libopencv_imgcodecs"), std::string::npos);
+}
+
 TEST_F(RigDetect, MaximumLikelihoodDistanceMatchesTheRenderedPose) {
   const rig_test::RigRun r = run("--json " + path("frame.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -115,7 +133,7 @@ TEST_F(RigDetect, BadFilesAreNamedAndTheOtherImagesStillProcessed) {
   std::ofstream(path("empty.png"));
   std::ofstream(path("notes.png")) << "not an image\n";
   std::vector<uchar> png;
-  cv::imencode(".png", *image_, png);
+  vision::imencode(".png", *image_, png);
   std::ofstream(path("truncated.png"), std::ios::binary)
       .write(reinterpret_cast<const char*>(png.data()),
              static_cast<std::streamsize>(png.size() / 2));
@@ -145,8 +163,8 @@ TEST_F(RigDetect, SixteenBitAndColourImagesAreConverted) {
   cv::Mat wide, bgr;
   image_->convertTo(wide, CV_16U, 256.0);
   cv::cvtColor(*image_, bgr, cv::COLOR_GRAY2BGR);
-  cv::imwrite(path("wide.png"), wide);
-  cv::imwrite(path("colour.png"), bgr);
+  vision::imwrite(path("wide.png"), wide);
+  vision::imwrite(path("colour.png"), bgr);
   const rig_test::RigRun r = run("--json " + path("wide.png") + " " + path("colour.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const auto& j : json_lines(r.out))
@@ -154,7 +172,7 @@ TEST_F(RigDetect, SixteenBitAndColourImagesAreConverted) {
 }
 
 TEST_F(RigDetect, ImageOfAnotherSizeThanTheCameraIsRefused) {
-  cv::imwrite(path("dot.png"), cv::Mat(1, 1, CV_8U, cv::Scalar(0)));
+  vision::imwrite(path("dot.png"), cv::Mat(1, 1, CV_8U, cv::Scalar(0)));
   const rig_test::RigRun r = run(path("dot.png"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("the built-in paper camera (no --camera) is for 736x571 px but image '" +

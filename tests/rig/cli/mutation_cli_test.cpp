@@ -24,7 +24,6 @@
 #include <iterator>
 #include <map>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -35,6 +34,7 @@
 #include "file_bytes.hpp"
 #include "sim/scene/renderer.hpp"
 #include "synthetic_run.hpp"
+#include "vision/image_codecs.hpp"
 
 extern char** environ;
 
@@ -328,9 +328,9 @@ TEST_F(MutatedInputs, CalibrationProblemAndImagesEndInADocumentedExitNamingTheFi
   pose.t = Eigen::Vector3d(0.01, 0.0, 0.5);
   const cv::Mat frame = renderer.render(pose, 3).image;
   const fs::path png = dir_ / "frame.png", pgm = dir_ / "frame.pgm", good = dir_ / "good.png";
-  ASSERT_TRUE(cv::imwrite(png.string(), frame));
-  ASSERT_TRUE(cv::imwrite(pgm.string(), frame));
-  ASSERT_TRUE(cv::imwrite(good.string(), frame));
+  ASSERT_TRUE(vision::imwrite(png.string(), frame));
+  ASSERT_TRUE(vision::imwrite(pgm.string(), frame));
+  ASSERT_TRUE(vision::imwrite(good.string(), frame));
   const std::string png_bytes = rig_test::file_bytes(png), pgm_bytes = rig_test::file_bytes(pgm);
   const fs::path camera = dir_ / "camera.yaml", problem = dir_ / "problem.json";
   const std::string camera_text = rig_test::file_bytes(kConfig + "/cameras/sony_xc555.yaml");

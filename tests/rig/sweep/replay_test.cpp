@@ -11,12 +11,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "db/store/sha256.hpp"
 #include "db/store/store.hpp"
 #include "motion/errors.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -52,7 +52,7 @@ class RecordedRunFixture : public ::testing::Test {
       for (int c = 0; c < width; ++c)
         image.at<unsigned char>(r, c) = static_cast<unsigned char>((r + 3 * c + 17 * seed) % 256);
     const std::string path = (dir_ / name).string();
-    cv::imwrite(path, image);
+    vision::imwrite(path, image);
     return path;
   }
 
@@ -193,7 +193,7 @@ TEST_F(RecordedRunFixture, TheFramesAreTheSavedPngsInOrderWithTheirPathsAsOrigin
     EXPECT_EQ(f.origin, path);
     EXPECT_EQ(f.frame_id, static_cast<std::uint64_t>(k));
     EXPECT_GE(f.host_time, before);  // the controller's "exposed after settled" check
-    const cv::Mat expected = cv::imread(path, cv::IMREAD_UNCHANGED);
+    const cv::Mat expected = vision::imread(path, cv::IMREAD_UNCHANGED);
     ASSERT_EQ(f.image.type(), CV_8UC1);
     EXPECT_EQ(cv::norm(f.image, expected, cv::NORM_INF), 0.0) << k;
   }

@@ -6,7 +6,6 @@
 #include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 
@@ -14,6 +13,7 @@
 #include "file_bytes.hpp"
 #include "rig_command.hpp"
 #include "sim_rig_fixture.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -49,7 +49,7 @@ cv::Mat picture(const std::string& html, const std::string& id) {
   const std::string prefix = "data:image/png;base64,";
   const auto begin = html.find(prefix, at) + prefix.size();
   const std::string png = unbase64(html.substr(begin, html.find('"', begin) - begin));
-  return cv::imdecode(std::vector<unsigned char>(png.begin(), png.end()), cv::IMREAD_COLOR);
+  return vision::imdecode(std::vector<unsigned char>(png.begin(), png.end()), cv::IMREAD_COLOR);
 }
 
 // What `rig report` draws with (rig/cli/src/cmd_report.cpp): Okabe-Ito orange.

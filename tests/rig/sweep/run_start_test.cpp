@@ -14,12 +14,12 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 
 #include "db/store/sha256.hpp"
 #include "rig/sweep/frame_files.hpp"
 #include "rig/sweep/run_record.hpp"
+#include "vision/image_codecs.hpp"
 
 namespace {
 
@@ -237,7 +237,7 @@ TEST_F(RunStartTest, AReplayRecordsANewRunNamingTheRecordedOneAndServesItsFrames
       {{"description", "one position"}, {"positions", {{400.0, 150.0}}}});
   const std::int64_t recorded = store_->start_run(rig::sweep::describe_run(config_, plan));
   const std::string png = (dir_ / "p0_f0.png").string();
-  ASSERT_TRUE(cv::imwrite(png, cv::Mat(571, 736, CV_8UC1, cv::Scalar(77))));
+  ASSERT_TRUE(vision::imwrite(png, cv::Mat(571, 736, CV_8UC1, cv::Scalar(77))));
   std::ifstream in(png, std::ios::binary);
   db::store::PositionRecord p;
   p.commanded_x_mm = p.measured_x_mm.emplace(400);

@@ -13,12 +13,12 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <string>
 #include <vector>
 
 #include "sim/camera/server.hpp"
 #include "vision/gige_source.hpp"
+#include "vision/image_codecs.hpp"
 
 extern char** environ;
 
@@ -146,7 +146,7 @@ TEST(RigCapture, SavesTriggeredFramesFromTheSimulatedCamera) {
                      out.string(), "--timeout-ms", "10000"}),
             0);
   for (const char* name : {"frame_000000.png", "frame_000001.png", "frame_000002.png"}) {
-    const cv::Mat image = cv::imread((out / name).string(), cv::IMREAD_UNCHANGED);
+    const cv::Mat image = vision::imread((out / name).string(), cv::IMREAD_UNCHANGED);
     EXPECT_EQ(image.cols, 736) << name;
     EXPECT_EQ(image.rows, 571) << name;
   }

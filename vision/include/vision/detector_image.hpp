@@ -45,12 +45,13 @@ struct ImageHeader {
 // kMaxImageBytes.
 ImageHeader read_image_header(const std::uint8_t* data, std::size_t size, const std::string& name);
 
-// Decodes the `size` image bytes at `data` with cv::imdecode(`imread_flags`)
+// Decodes the `size` image bytes at `data` with vision::imdecode(`imread_flags`)
 // after read_image_header has accepted them; PNG and JPEG data must also end
 // with their end marker (IEND chunk, EOI marker), because their decoders
 // return a partly grey image, not an error, when the data is cut short.
 // Throws ImageError naming `name` when the bytes are empty, refused by
-// read_image_header, truncated, or do not decode.
+// read_image_header, truncated, or do not decode; ImageCodecsUnavailable
+// when the decoders cannot be loaded (vision/image_codecs.hpp).
 cv::Mat decode_image(const std::uint8_t* data, std::size_t size, int imread_flags,
                      const std::string& name);
 
