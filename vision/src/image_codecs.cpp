@@ -17,6 +17,13 @@ using Imwrite = bool (*)(const std::string&, const cv::_InputArray&, const std::
 using Imdecode = cv::Mat (*)(const cv::_InputArray&, int);
 using Imencode = bool (*)(const std::string&, const cv::_InputArray&, std::vector<uchar>&,
                           const std::vector<int>&);
+// The types are those OpenCV declares, checked without linking a function:
+// the static_cast picks the overload of exactly that type or fails to
+// compile, and sizeof does not evaluate it.
+static_assert(sizeof(static_cast<Imread>(&cv::imread)) > 0);
+static_assert(sizeof(static_cast<Imwrite>(&cv::imwrite)) > 0);
+static_assert(sizeof(static_cast<Imdecode>(&cv::imdecode)) > 0);
+static_assert(sizeof(static_cast<Imencode>(&cv::imencode)) > 0);
 constexpr const char* kImread =
     "_ZN2cv6imreadERKNSt7__cxx1112basic_stringIcSt11char_traitsIcESaIcEEEi";
 constexpr const char* kImwrite =
