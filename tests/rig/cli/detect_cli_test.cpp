@@ -96,8 +96,6 @@ TEST_F(RigDetect, PrintsDetectionsAndEveryEstimateInThePublicJsonShape) {
   }
 }
 
-// Corners within ~0.01 px give the distance within 0.01 % at 0.5 m; 0.05 %
-// leaves room for the solver's own tolerance.
 // The image codecs (vision/image_codecs.hpp) are loaded to read an image,
 // not when rig starts: `rig solve` reads no image and never loads them. The
 // dynamic loader names each library it loads when LD_DEBUG=files.
@@ -115,6 +113,8 @@ TEST_F(RigDetect, LoadsTheImageCodecsOnlyToReadAnImage) {
   EXPECT_NE(detect.err.find("file=libopencv_imgcodecs"), std::string::npos);
 }
 
+// Corners within ~0.01 px give the distance within 0.01 % at 0.5 m; 0.05 %
+// leaves room for the solver's own tolerance.
 TEST_F(RigDetect, MaximumLikelihoodDistanceMatchesTheRenderedPose) {
   const rig_test::RigRun r = run("--json " + path("frame.png"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
