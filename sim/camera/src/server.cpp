@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "sim/camera/genicam_xml.hpp"
+#include "trigger_pacing.hpp"
 
 namespace sim::camera {
 
@@ -137,6 +138,7 @@ struct CameraServer::Impl {
   }
 
   void render_into(ArvBuffer* buffer, guint32 exposure_us, guint32 gain, ArvPixelFormat format) {
+    detail::pace_camera_thread(arv_gv_fake_camera_get_fake_camera(gv_camera));
     const CameraServerOptions& options = server->options_;
     const double start_s =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - epoch).count();

@@ -9,6 +9,7 @@
 
 #include <arv.h>
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -217,6 +218,39 @@ TEST_F(SimCamera, NoFrameLostOrIncompleteOver500FramesWithTheOtherCoreBusy) {
   EXPECT_EQ(source.counters().lost, 0u);
   EXPECT_EQ(source.counters().incomplete, 0u);
   EXPECT_EQ(source.counters().delivered, 500u);
+}
+
+// Between triggers, with acquisition on, the camera sleeps until its next look
+// for a trigger (1 ms at trigger_poll_hz = 1000) instead of spinning towards
+// it, as Aravis's fake camera thread would (sim/camera/src/trigger_pacing.cpp).
+// After one triggered frame (from which on the thread paces itself by the
+// trigger period) the process idles for 1 s: a spinning thread costs a
+// whole core then, about 1 CPU second (at least 0.5 with two other busy
+// processes sharing the two cores), while 1,000 wake-ups of a few
+// microseconds each (tens under the sanitizers) and the client's heartbeat
+// cost some 0.01-0.05 s. The bound, 0.25 CPU s, sits between the two.
+TEST_F(SimCamera, SleepsBetweenTriggersWhileAcquisitionIsOn) {
+  start();
+  vision::GigeSource source(server_->address());
+  source.open();
+  source.trigger();
+  source.grab(kFrameWait);
+  const auto cpu_seconds = [] {
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    const auto seconds = [](const timeval& t) { return t.tv_sec + t.tv_usec * 1e-6; };
+    return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+  };
+  const double before = cpu_seconds();
+  std::this_thread::sleep_for(1s);
+  const double idle_cpu_s = cpu_seconds() - before;
+  RecordProperty("idle_cpu_s", std::to_string(idle_cpu_s));
+  EXPECT_LT(idle_cpu_s, 0.25);
+  // The camera still answers a trigger after the idle second.
+  source.trigger();
+  const vision::Frame frame = source.grab(kFrameWait);
+  EXPECT_EQ(frame.frame_id, server_->last_exposure().frame_id);
+  EXPECT_EQ(source.counters().delivered, 2u);
 }
 
 // The camera says it is simulated, and which realism profile it renders:
