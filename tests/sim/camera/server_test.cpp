@@ -225,10 +225,11 @@ TEST_F(SimCamera, NoFrameLostOrIncompleteOver500FramesWithTheOtherCoreBusy) {
 // it, as Aravis's fake camera thread would (sim/camera/src/trigger_pacing.cpp).
 // After one triggered frame (from which on the thread paces itself by the
 // trigger period) the process idles for 1 s: a spinning thread costs a
-// whole core then, about 1 CPU second (at least 0.5 with two other busy
-// processes sharing the two cores), while 1,000 wake-ups of a few
-// microseconds each (tens under the sanitizers) and the client's heartbeat
-// cost some 0.01-0.05 s. The bound, 0.25 CPU s, sits between the two.
+// whole core then, about 1 CPU second (at least 2/3 of one with two other
+// busy processes sharing the two cores; measured 0.91 with the pacing off),
+// while 1,000 wake-ups and the client's heartbeat cost a few hundredths
+// (measured 0.021-0.023 CPU s in Release, 0.026-0.028 under ASan + UBSan).
+// The bound, 0.25 CPU s, sits between the two, ten times the paced cost.
 TEST_F(SimCamera, SleepsBetweenTriggersWhileAcquisitionIsOn) {
   start();
   vision::GigeSource source(server_->address());
