@@ -85,17 +85,18 @@ class ChildProcess {
       }
       const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
           deadline - std::chrono::steady_clock::now());
-      if (left.count() <= 0) return std::nullopt;
-      if (eof_) return std::nullopt;
-      pollfd p{out_, POLLIN, 0};
-      if (poll(&p, 1, static_cast<int>(left.count())) <= 0) return std::nullopt;
-      char chunk[512];
-      const ssize_t n = ::read(out_, chunk, sizeof chunk);
-      if (n <= 0) {
-        eof_ = true;
-        return std::nullopt;
-      }
-      buffer_.append(chunk, static_cast<size_t>(n));
+      if (left.count() <= 0 || !read_more(static_cast<int>(left.count()))) return std::nullopt;
+    }
+  }
+
+  // Everything the child wrote to stdout, the lines already read included:
+  // reads on until its stdout ends or `timeout` passes (for a failure message).
+  std::string transcript(std::chrono::milliseconds timeout) {
+    const auto deadline = std::chrono::steady_clock::now() + timeout;
+    for (;;) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+          deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0 || !read_more(static_cast<int>(left.count()))) return transcript_;
     }
   }
 
@@ -104,10 +105,28 @@ class ChildProcess {
   bool at_eof() const { return eof_ && buffer_.find('\n') == std::string::npos; }
 
  private:
+  // Reads what the child writes within `timeout_ms`: false on a timeout or
+  // at the end of its stdout.
+  bool read_more(int timeout_ms) {
+    if (eof_) return false;
+    pollfd p{out_, POLLIN, 0};
+    if (poll(&p, 1, timeout_ms) <= 0) return false;
+    char chunk[512];
+    const ssize_t n = ::read(out_, chunk, sizeof chunk);
+    if (n <= 0) {
+      eof_ = true;
+      return false;
+    }
+    buffer_.append(chunk, static_cast<size_t>(n));
+    transcript_.append(chunk, static_cast<size_t>(n));
+    return true;
+  }
+
   pid_t pid_ = -1;
   int out_ = -1;
   bool eof_ = false;
   std::string buffer_;
+  std::string transcript_;
 };
 
 // Runs a command to completion; returns its stdout and sets *status to its exit status.

@@ -78,10 +78,17 @@ SweepEndpoints wait_for_endpoints(ChildProcess& child, std::chrono::seconds time
 // broken test.
 constexpr auto kControlWait = 10000ms;
 
-// Waits for the child to exit by itself; returns its exit status.
-int wait_exit(ChildProcess& child, std::chrono::seconds timeout) {
+// Waits up to `timeout` for the child to exit by itself with status
+// `expected`. A failure shows the status and the sweep's standard output (its
+// run log says why it stopped), which the test has otherwise read only in part.
+::testing::AssertionResult exits_with(ChildProcess& child, int expected,
+                                      std::chrono::seconds timeout) {
   const auto status = child.signal_and_wait(0, timeout);
-  return status ? *status : -1;
+  if (status == expected) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure()
+         << "rig sweep " << (status ? "exited " + std::to_string(*status) : "still ran")
+         << ", expected exit " << expected << "; its standard output:\n"
+         << child.transcript(1000ms);
 }
 
 // Every stored position of the run is whole: an ok position has all its
@@ -105,7 +112,7 @@ TEST(SweepEndToEnd, StoresEveryPlannedPositionOnceWithEverySolverAndTheTrueDista
   SimRig rig;
   const std::string sweep = rig.write_sweep(SweepFileOptions{});
   auto child = start_sweep({sweep});
-  ASSERT_EQ(wait_exit(*child, 120s), 0);
+  ASSERT_TRUE(exits_with(*child, 0, 120s));
 
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs WHERE id = 1"), "completed");
@@ -176,7 +183,7 @@ TEST(SweepEndToEnd, EveryDetectorRunsOnEveryFrameAndTheReportComparesDetectorByS
   o.plan = "kind = \"grid\"\nx_mm = [300.0, 700.0, 200.0]\ny_mm = [150.0, 150.0, 10.0]\n";
   o.detectors = "";  // the default: every detector that reads rig4x4
   auto child = start_sweep({rig.write_sweep(o)});
-  ASSERT_EQ(wait_exit(*child, 120s), 0);
+  ASSERT_TRUE(exits_with(*child, 0, 120s));
 
   SqlProbe db(rig.database());
   const std::vector<std::string> detectors = vision::detectors_for_family("rig4x4");
@@ -276,7 +283,7 @@ TEST(SweepEndToEnd, AShortSweepRunsOverModbusRtu) {
     o.plan = "kind = \"grid\"\nx_mm = [300.0, 500.0, 100.0]\ny_mm = [150.0, 150.0, 10.0]\n";
     o.frames = 1;
     auto child = start_sweep({rig.write_sweep(o)});
-    ASSERT_EQ(wait_exit(*child, 120s), 0);
+    ASSERT_TRUE(exits_with(*child, 0, 120s));
 
     SqlProbe db(rig.database());
     EXPECT_EQ(db.value("SELECT status FROM runs WHERE id = 1"), "completed");
@@ -348,7 +355,7 @@ TEST(SweepEndToEnd, ResumesAfterKill9AtRandomMomentsWithoutLossOrDuplicate) {
     seen_counts.insert(stored);
   }
   auto last = start_sweep({sweep, "--resume", "1"});
-  EXPECT_EQ(wait_exit(*last, 120s), 0);
+  EXPECT_TRUE(exits_with(*last, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(DISTINCT plan_index) FROM positions"), 20);
@@ -375,7 +382,7 @@ TEST(SweepEndToEnd, SigintFinishesThePositionAbortsTheRunAndResumeCompletesIt) {
     EXPECT_LT(db.count("SELECT count(*) FROM positions"), 6);
   }
   auto resumed = start_sweep({sweep, "--resume", "1"});
-  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
+  EXPECT_TRUE(exits_with(*resumed, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions"), 6);
@@ -411,7 +418,7 @@ TEST(SweepEndToEnd, ABenchAlarmPausesTheSweepUntilResumedThenItCompletes) {
   // Paused means paused: nothing stored meanwhile.
   EXPECT_EQ(SqlProbe(rig.database()).count("SELECT count(*) FROM positions"), before);
   rig::telemetry::send_control(endpoints.control, "resume", kControlWait);
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
@@ -427,7 +434,7 @@ TEST(SweepEndToEnd, ABenchAlarmAbortsTheRunWhenThePolicySaysSo) {
   faults.alarm_at = sim::bench::AlarmAt{550.0, 150.0, 5.0};
   rig.bench().inject(faults);
   auto child = start_sweep({sweep});
-  EXPECT_EQ(wait_exit(*child, 120s), 1);
+  EXPECT_TRUE(exits_with(*child, 1, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "aborted");
   EXPECT_NE(db.value("SELECT status_reason FROM runs").find("alarm"), std::string::npos);
@@ -444,7 +451,7 @@ TEST(SweepEndToEnd, ABenchServerRestartMidSweepIsRiddenOut) {
   // reconnect watchdog (3 s in the profile) or the controller's link retries
   // carry the sweep through.
   rig.bench().restart_network(1000ms);
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
@@ -460,7 +467,7 @@ TEST(SweepEndToEnd, ABenchThatRestartsMidSweepIsHomedAgainAndTheRunCompletes) {
   auto child = start_sweep({sweep});
   ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
   rig.bench().power_cycle(1000ms);
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
@@ -506,7 +513,7 @@ TEST(SweepEndToEnd, ThePrintedResumeCommandWorksOnABenchThatLatchedNotHomed) {
   for (std::string w; words >> w;)
     args.push_back(w);
   auto resumed = start_sweep(args);
-  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
+  EXPECT_TRUE(exits_with(*resumed, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
@@ -522,7 +529,7 @@ TEST(SweepEndToEnd, CameraLossFailsPositionsThenAbortsAndResumeFinishes) {
   auto child = start_sweep({sweep});
   ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
   rig.camera().stop();  // the camera goes silent: every grab times out
-  EXPECT_EQ(wait_exit(*child, 120s), 1);
+  EXPECT_TRUE(exits_with(*child, 1, 120s));
   {
     SqlProbe db(rig.database());
     EXPECT_EQ(db.value("SELECT status FROM runs"), "aborted");
@@ -536,7 +543,7 @@ TEST(SweepEndToEnd, CameraLossFailsPositionsThenAbortsAndResumeFinishes) {
   }
   rig.camera().start();
   auto resumed = start_sweep({sweep, "--resume", "1"});
-  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
+  EXPECT_TRUE(exits_with(*resumed, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions"), 6);  // failed ones are kept, not retaken
@@ -558,7 +565,7 @@ TEST(SweepEndToEnd, ACameraThatRestartsMidSweepIsReopenedAndEveryPositionIsMeasu
   rig.camera().stop();
   std::this_thread::sleep_for(800ms);
   rig.camera().start();
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.column("SELECT plan_index FROM positions WHERE run_id = 1 ORDER BY plan_index"),
@@ -588,7 +595,7 @@ TEST(SweepEndToEnd, AResumeWithRetryFailedMeasuresAgainExactlyThePositionsStored
   auto child = start_sweep({sweep});
   ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
   rig.camera().stop();
-  EXPECT_EQ(wait_exit(*child, 120s), 1);
+  EXPECT_TRUE(exits_with(*child, 1, 120s));
   const std::string ok_rows =
       "SELECT plan_index || ':' || id || ':' || measured_x_mm FROM positions WHERE status = 'ok' "
       "ORDER BY plan_index";
@@ -604,7 +611,7 @@ TEST(SweepEndToEnd, AResumeWithRetryFailedMeasuresAgainExactlyThePositionsStored
   }
   rig.camera().start();
   auto resumed = start_sweep({sweep, "--resume", "1", "--retry-failed"});
-  EXPECT_EQ(wait_exit(*resumed, 120s), 0);
+  EXPECT_TRUE(exits_with(*resumed, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.column("SELECT plan_index FROM positions WHERE run_id = 1 ORDER BY plan_index"),
@@ -634,7 +641,7 @@ TEST(SweepEndToEnd, ACompletedRunWithFailedPositionsIsResumedOnlyToRetryThem) {
   auto child = start_sweep({sweep});
   ASSERT_TRUE(wait_for_line(*child, "position 1 ", 60s));
   rig.camera().stop();
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   std::vector<std::string> failed_before;
   {
     SqlProbe db(rig.database());
@@ -649,7 +656,7 @@ TEST(SweepEndToEnd, ACompletedRunWithFailedPositionsIsResumedOnlyToRetryThem) {
   EXPECT_EQ(plain.exit_code, 2);
   EXPECT_NE(plain.err.find("run 1 is completed"), std::string::npos) << plain.err;
   auto retry = start_sweep({sweep, "--resume", "1", "--retry-failed"});
-  EXPECT_EQ(wait_exit(*retry, 120s), 0);
+  EXPECT_TRUE(exits_with(*retry, 0, 120s));
   {
     SqlProbe db(rig.database());
     EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
@@ -744,7 +751,7 @@ TEST(SweepTelemetry, ASubscriberSeesRunStartEveryPositionAndRunStopAndControlPau
     }
   }
   EXPECT_TRUE(pause == Pause::kResumed) << "the sweep never said it was paused";
-  EXPECT_EQ(wait_exit(*child, 30s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 30s));
   ASSERT_FALSE(types.empty());
   EXPECT_EQ(types.front(), "run_start");
   EXPECT_EQ(types.back(), "run_stop");
@@ -778,7 +785,7 @@ TEST(SweepTelemetry, ADeeplyNestedControlRequestIsRefusedAndTheSweepCompletes) {
       << reply.to_string();
   const auto status = rig::telemetry::send_control(endpoints.control, "status", kControlWait);
   EXPECT_TRUE(status.value("ok", false)) << status.dump();
-  EXPECT_EQ(wait_exit(*child, 120s), 0);
+  EXPECT_TRUE(exits_with(*child, 0, 120s));
   SqlProbe db(rig.database());
   EXPECT_EQ(db.value("SELECT status FROM runs"), "completed");
   EXPECT_EQ(db.count("SELECT count(*) FROM positions WHERE status = 'ok'"), 6);
