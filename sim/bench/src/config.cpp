@@ -58,6 +58,8 @@ FaultPlan read_faults(config::Table f) {
   p.stall_after_requests = count("stall_after_requests");
   p.stall_s = f.number_or("stall_s", 0, config::non_negative());
   p.reply_delay_ms = f.number_or("reply_delay_ms", 0, config::non_negative());
+  p.late_after_requests = count("late_after_requests");
+  p.late_ms = f.number_or("late_ms", 0, config::non_negative());
   p.refuse_writes = count("refuse_writes");
   p.ignore_writes = count("ignore_writes");
   config::Table alarm_at = f.optional_table("alarm_at");

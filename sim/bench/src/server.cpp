@@ -300,6 +300,9 @@ bool BenchServer::handle(const std::uint8_t* query, int length) {
       stall_s = faults_.stall_s;
     }
     delay_ms = faults_.reply_delay_ms;
+    if (faults_.late_after_requests > 0 && --faults_.late_after_requests == 0) {
+      delay_ms += faults_.late_ms;
+    }
     if (is_write && faults_.refuse_writes > 0) {
       --faults_.refuse_writes;
       refuse = true;

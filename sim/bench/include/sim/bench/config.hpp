@@ -62,6 +62,8 @@ struct FaultPlan {
   int stall_after_requests = 0;  // leave the Nth request unanswered and answer
   double stall_s = 0;            //   nothing at all for stall_s (wall clock)
   double reply_delay_ms = 0;     // every answer this late (wall clock)
+  int late_after_requests = 0;   // answer the Nth request, but late_ms late (wall
+  double late_ms = 0;            //   clock): past the driver's timeout, a stale reply
   int refuse_writes = 0;         // next N writes: Modbus exception 4 (server failure)
   int ignore_writes = 0;         // next N writes: acknowledged, not stored
   std::optional<AlarmAt> alarm_at;
