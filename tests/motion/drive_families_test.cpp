@@ -16,12 +16,9 @@
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
 #include <signal.h>
-#include <stdlib.h>
-#include <sys/stat.h>
 
 #include <chrono>
 #include <cstdint>
-#include <cstdlib>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -33,6 +30,7 @@
 #include "motion/drive_profile.hpp"
 #include "motion/errors.hpp"
 #include "motion/two_drive_bench.hpp"
+#include "pty_pair.hpp"
 
 namespace {
 
@@ -310,43 +308,29 @@ INSTANTIATE_TEST_SUITE_P(Families, PconDrives, ::testing::Values(kPcon),
 // pyserial cannot set parity on one, so the emulator's end is 8N1): this
 // checks the RTU framing with two stations on one line, not serial timing.
 TEST(DriveFamilyRtu, TheAzPairIsDrivenOverRtuThroughAPtyPair) {
-  char dir_template[] = "/tmp/rig-families-XXXXXX";
-  ASSERT_NE(mkdtemp(dir_template), nullptr);
-  const std::string dir = dir_template;
-  {
-    ChildProcess socat({"socat", "pty,raw,echo=0,link=" + dir + "/drives",
-                        "pty,raw,echo=0,link=" + dir + "/driver"});
-    struct stat st;
-    for (int i = 0; i < 400 && (stat((dir + "/drives").c_str(), &st) != 0 ||
-                                stat((dir + "/driver").c_str(), &st) != 0);
-         ++i) {
-      std::this_thread::sleep_for(5ms);  // socat makes the pair within milliseconds
-    }
-    ASSERT_EQ(stat((dir + "/driver").c_str(), &st), 0) << "socat made no pty pair";
-    ChildProcess drives({"/usr/bin/python3",
-                         std::string(RIG_SOURCE_DIR) + "/tests/motion/drive_families.py",
-                         "--family", "az", "--rtu", dir + "/drives", "--baud", "115200", "--parity",
-                         "N", "--stop", "1"});
-    const auto line = drives.read_line(kEmulatorStart);
-    ASSERT_TRUE(line && *line == "READY") << "drive-family emulator did not start over RTU";
-    const motion::DriveProfile profile = motion::load_drive_profile(
-        std::string(RIG_SOURCE_DIR) + "/config/benches/oriental_az_two_axes.toml");
-    motion::TwoDriveBench bench(
-        motion::BenchUrl::parse("modbus-rtu://" + dir + "/driver?baud=115200&parity=E&stop=1"),
-        profile);
-    bench.home();
-    const motion::BenchStatus home = bench.wait_settled(kSettle);
-    EXPECT_TRUE(home.homed);
-    EXPECT_NEAR(home.position.x_mm, 0, kExact);
-    EXPECT_NEAR(home.position.y_mm, 0, kExact);
-    bench.set_speed(100);
-    bench.move_to(23.45, 6.78);
-    const motion::BenchStatus s = bench.wait_settled(kSettle);
-    EXPECT_NEAR(s.position.x_mm, 23.45, kExact);
-    EXPECT_NEAR(s.position.y_mm, 6.78, kExact);
-    EXPECT_TRUE(s.in_position);
-  }
-  std::system(("rm -rf " + dir).c_str());
+  const rig_test::PtyPair serial;
+  ChildProcess drives({"/usr/bin/python3",
+                       std::string(RIG_SOURCE_DIR) + "/tests/motion/drive_families.py", "--family",
+                       "az", "--rtu", serial.drive_end(), "--baud", "115200", "--parity", "N",
+                       "--stop", "1"});
+  const auto line = drives.read_line(kEmulatorStart);
+  ASSERT_TRUE(line && *line == "READY") << "drive-family emulator did not start over RTU";
+  const motion::DriveProfile profile = motion::load_drive_profile(
+      std::string(RIG_SOURCE_DIR) + "/config/benches/oriental_az_two_axes.toml");
+  motion::TwoDriveBench bench(motion::BenchUrl::parse("modbus-rtu://" + serial.driver_end() +
+                                                      "?baud=115200&parity=E&stop=1"),
+                              profile);
+  bench.home();
+  const motion::BenchStatus home = bench.wait_settled(kSettle);
+  EXPECT_TRUE(home.homed);
+  EXPECT_NEAR(home.position.x_mm, 0, kExact);
+  EXPECT_NEAR(home.position.y_mm, 0, kExact);
+  bench.set_speed(100);
+  bench.move_to(23.45, 6.78);
+  const motion::BenchStatus s = bench.wait_settled(kSettle);
+  EXPECT_NEAR(s.position.x_mm, 23.45, kExact);
+  EXPECT_NEAR(s.position.y_mm, 6.78, kExact);
+  EXPECT_TRUE(s.in_position);
 }
 
 }  // namespace

@@ -22,6 +22,7 @@
 #include "motion/bench_url.hpp"
 #include "motion/errors.hpp"
 #include "motion/modbus_bench.hpp"
+#include "pty_pair.hpp"
 #include "rig/telemetry/telemetry.hpp"
 #include "rig_command.hpp"
 #include "sim_rig_fixture.hpp"
@@ -263,20 +264,10 @@ TEST(SweepEndToEnd, EveryDetectorRunsOnEveryFrameAndTheReportComparesDetectorByS
 // bytes at any rate, so this is RTU framing, unit ids and the driver's silent
 // intervals end to end, not the line's timing (tests/motion/third_party_test.cpp).
 TEST(SweepEndToEnd, AShortSweepRunsOverModbusRtu) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("rig_rtu_sweep_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string bench_end = (dir / "bench").string(), driver_end = (dir / "driver").string();
-  ChildProcess socat(
-      {"socat", "pty,raw,echo=0,link=" + bench_end, "pty,raw,echo=0,link=" + driver_end});
-  for (int i = 0;
-       i < 400 && !(std::filesystem::exists(bench_end) && std::filesystem::exists(driver_end));
-       ++i) {
-    std::this_thread::sleep_for(5ms);  // socat makes the pair within milliseconds
-  }
-  ASSERT_TRUE(std::filesystem::exists(driver_end)) << "socat made no pty pair";
+  const rig_test::PtyPair line;
+  const std::string& driver_end = line.driver_end();
   {
-    SimRig rig(4.0, bench_end);
+    SimRig rig(4.0, line.drive_end());
     const std::string url = "modbus-rtu://" + driver_end + "?baud=115200&parity=N&stop=1&unit=1";
     rig.set_bench_url(url);
     SweepFileOptions o;
@@ -308,7 +299,6 @@ TEST(SweepEndToEnd, AShortSweepRunsOverModbusRtu) {
             .find("modbus-rtu://" + driver_end + "?baud=115200&parity=N&data=8&stop=1&unit=1"),
         std::string::npos);
   }
-  std::filesystem::remove_all(dir);
 }
 
 TEST(SweepEndToEnd, ResumesAfterKill9AtRandomMomentsWithoutLossOrDuplicate) {
