@@ -122,6 +122,16 @@ void ModbusLink::keep_silence() {
   if (silence_.count() == 0) return;
   const auto ready = line_->last_frame_end + silence_;
   if (std::chrono::steady_clock::now() < ready) std::this_thread::sleep_until(ready);
+  // Nothing received before a request is its answer: drop it (the end of a
+  // reply the last request gave up on), for RTU has no transaction id that
+  // would tell an old reply from the new one.
+  modbus_flush(line_->ctx);
+}
+
+void ModbusLink::drop_late_reply() {
+  if (silence_.count() == 0) return;
+  std::this_thread::sleep_for(timeout_);
+  modbus_flush(line_->ctx);
 }
 
 std::optional<int> ModbusLink::probe_answering_unit() {
@@ -147,7 +157,10 @@ int ModbusLink::finish(int rc) {
   if (err == EMBBADSLAVE && url_.transport == BenchUrl::Transport::kRtu) {
     foreign_unit_ = probe_answering_unit();
   }
-  if (is_link_error(err)) close();
+  if (is_link_error(err)) {
+    drop_late_reply();
+    close();
+  }
   return err;
 }
 

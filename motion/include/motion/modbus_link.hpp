@@ -76,8 +76,15 @@ class ModbusLink {
   int finish(int rc);
   // Addresses this link's unit with its timeout on the (possibly shared) context.
   void select();
-  // Sleeps until frame_silence() has passed since the last frame ended.
+  // Sleeps until frame_silence() has passed since the last frame ended, then
+  // (RTU) drops whatever the line received since: no answer to the request
+  // about to be sent.
   void keep_silence();
+  // RTU, after a request failed on the link (no answer in time, a garbled or
+  // a wrong answer): waits one response timeout for the reply that may still
+  // be on its way and drops it, so that it is not read as the answer to the
+  // next request. Nothing for TCP, where a reconnect opens a new connection.
+  void drop_late_reply();
   // Asks the unit once more with a raw request and returns the unit id the
   // answer carries, if it is another one (libmodbus reports only that it
   // differs).
