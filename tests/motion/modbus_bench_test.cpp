@@ -12,7 +12,6 @@
 #include <thread>
 
 #include "motion/errors.hpp"
-#include "pty_pair.hpp"
 #include "sim_bench_fixture.hpp"
 
 namespace {
@@ -207,33 +206,6 @@ TEST_F(ModbusBench, ReconnectsWhenTheDriveStopsAnsweringForAWhile) {
   server_->inject(faults);
   EXPECT_NEAR(bench->wait_settled(5s).position.x_mm, 30, 1e-9);
   EXPECT_GE(bench->reconnects(), 1);
-}
-
-// On a serial line a reply that comes after the response timeout is still on
-// its way when the driver asks again, and Modbus RTU has no transaction id to
-// tell it from the answer to the next request: taken for it, every request
-// after reads the reply to the one before (the wrong function: invalid data;
-// the same read: old values). The drive answers the write that starts a move
-// 1.5 response timeouts late: the driver drops that reply, reconnects and
-// the move completes on the target.
-TEST_F(ModbusBench, AReplyPastTheTimeoutOnAnRtuLineIsNotTakenForTheNextAnswer) {
-  const rig_test::PtyPair serial;
-  options_.rtu_device = serial.drive_end();
-  start_server();
-  motion::ModbusBench bench(
-      motion::BenchUrl::parse("modbus-rtu://" + serial.driver_end() + "?baud=115200&parity=N"),
-      profile_);
-  bench.home();
-  bench.wait_settled(5s);
-  sim::bench::FaultPlan faults;
-  faults.late_after_requests = 1;
-  faults.late_ms = 1.5 * profile_.timing.response_timeout_ms;
-  server_->inject(faults);
-  bench.move_to(30, 20);
-  const motion::BenchStatus s = bench.wait_settled(5s);
-  EXPECT_NEAR(s.position.x_mm, 30, 1e-9);
-  EXPECT_NEAR(s.position.y_mm, 20, 1e-9);
-  EXPECT_GE(bench.reconnects(), 1);
 }
 
 TEST_F(ModbusBench, ReconnectsAfterServerRestartMidMoveAndSettles) {

@@ -8,7 +8,6 @@
 #include <gtest/gtest.h>
 #include <modbus/modbus.h>
 #include <poll.h>
-#include <sys/stat.h>
 #include <termios.h>
 #include <unistd.h>
 
@@ -24,6 +23,7 @@
 #include "child_process.hpp"
 #include "motion/errors.hpp"
 #include "motion/modbus_link.hpp"
+#include "pty_pair.hpp"
 #include "sim_bench_fixture.hpp"
 
 namespace {
@@ -168,38 +168,19 @@ TEST_F(PymodbusDrive, AlarmMeaningComesFromTheProfile) {
 // by libmodbus), not serial timing.
 class RtuOverPty : public SimBenchTest {
  protected:
-  void SetUp() override {
-    char dir_template[] = "/tmp/rig-rtu-XXXXXX";
-    ASSERT_NE(mkdtemp(dir_template), nullptr);
-    dir_ = dir_template;
-    socat_ = std::make_unique<ChildProcess>(
-        std::vector<std::string>{"socat", "pty,raw,echo=0,link=" + dir_ + "/bench",
-                                 "pty,raw,echo=0,link=" + dir_ + "/driver"});
-    struct stat st;
-    ASSERT_TRUE(eventually(
-        [&] {
-          return stat((dir_ + "/bench").c_str(), &st) == 0 &&
-                 stat((dir_ + "/driver").c_str(), &st) == 0;
-        },
-        kEventually))
-        << "socat made no pty pair";
-  }
-  void TearDown() override {
-    server_.reset();
-    socat_.reset();
-    std::system(("rm -rf " + dir_).c_str());
-  }
+  void TearDown() override { server_.reset(); }  // before the line goes
 
-  std::string dir_;
-  std::unique_ptr<ChildProcess> socat_;
+  const rig_test::PtyPair serial_;
+  const std::string bench_ = serial_.drive_end();    // the simulated bench's end
+  const std::string driver_ = serial_.driver_end();  // the driver's end
 };
 
 TEST_F(RtuOverPty, SimulatedBenchIsDrivenOverRtu) {
-  options_.rtu_device = dir_ + "/bench";
+  options_.rtu_device = bench_;
   start_server();
-  motion::ModbusBench bench(motion::BenchUrl::parse("modbus-rtu://" + dir_ +
-                                                    "/driver?baud=115200&parity=N&stop=1&unit=1"),
-                            profile_);
+  motion::ModbusBench bench(
+      motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=115200&parity=N&stop=1&unit=1"),
+      profile_);
   bench.home();
   bench.wait_settled(5s);
   bench.move_to(7.5, 2.25);
@@ -208,20 +189,45 @@ TEST_F(RtuOverPty, SimulatedBenchIsDrivenOverRtu) {
   EXPECT_NEAR(s.position.y_mm, 2.25, 1e-9);
 }
 
+// On a serial line a reply that comes after the response timeout is still on
+// its way when the driver asks again, and Modbus RTU has no transaction id to
+// tell it from the answer to the next request: taken for it, every request
+// after reads the reply to the one before (the wrong function: invalid data;
+// the same read: old values). The drive answers the write that starts a move
+// 1.5 response timeouts late: the driver drops that reply, reconnects and
+// the move completes on the target.
+TEST_F(RtuOverPty, AReplyPastTheTimeoutIsNotTakenForTheNextAnswer) {
+  options_.rtu_device = bench_;
+  start_server();
+  motion::ModbusBench bench(
+      motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=115200&parity=N"), profile_);
+  bench.home();
+  bench.wait_settled(5s);
+  sim::bench::FaultPlan faults;
+  faults.late_after_requests = 1;
+  faults.late_ms = 1.5 * profile_.timing.response_timeout_ms;
+  server_->inject(faults);
+  bench.move_to(30, 20);
+  const motion::BenchStatus s = bench.wait_settled(5s);
+  EXPECT_NEAR(s.position.x_mm, 30, 1e-9);
+  EXPECT_NEAR(s.position.y_mm, 20, 1e-9);
+  EXPECT_GE(bench.reconnects(), 1);
+}
+
 TEST_F(RtuOverPty, RequestsForAnotherUnitAreNotAnswered) {
-  options_.rtu_device = dir_ + "/bench";
+  options_.rtu_device = bench_;
   start_server();
   profile_.timing.reconnect_timeout_ms = 200;
   try {
     motion::ModbusBench bench(
-        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=115200&parity=N&unit=7"),
+        motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=115200&parity=N&unit=7"),
         profile_);
     FAIL() << "unit 7 answered; the simulated bench is unit 1";
   } catch (const motion::BenchLinkError& e) {
     // The message names the unit and the serial settings to check.
     const std::string what = e.what();
-    EXPECT_NE(what.find("no answer from unit 7 on " + dir_ +
-                        "/driver at 115200 baud, parity N, 8 data and 2 stop bits"),
+    EXPECT_NE(what.find("no answer from unit 7 on " + driver_ +
+                        " at 115200 baud, parity N, 8 data and 2 stop bits"),
               std::string::npos)
         << what;
     EXPECT_NE(what.find("check the drive's unit id"), std::string::npos) << what;
@@ -233,13 +239,12 @@ TEST_F(RtuOverPty, TheUrlsBaudAndStopBitsReachTheSerialLine) {
   // what the URL set is read back from the line's termios. A mismatched baud
   // rate cannot be shown on a pty (it ignores the rate); on a real line it
   // garbles or loses the answers, which the driver reports as such.
-  options_.rtu_device = dir_ + "/bench";
+  options_.rtu_device = bench_;
   start_server();
   motion::ModbusBench bench(
-      motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=38400&parity=E&stop=2"),
-      profile_);
+      motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=38400&parity=E&stop=2"), profile_);
   EXPECT_FALSE(bench.status().alarm);
-  const int fd = open((dir_ + "/driver").c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
+  const int fd = open(driver_.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
   ASSERT_GE(fd, 0);
   termios line{};
   ASSERT_EQ(tcgetattr(fd, &line), 0);
@@ -300,7 +305,7 @@ TEST_F(RtuOverPty, LinksToTwoUnitsOnOneDeviceShareOnePort) {
   // Two drives on one RS-485 line: one open port, so that the silent
   // interval is kept between frames to different units, and a port closed
   // after a link error is closed for both.
-  const std::string line = "modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1";
+  const std::string line = "modbus-rtu://" + driver_ + "?baud=9600&parity=E&stop=1";
   motion::ModbusLink x(motion::BenchUrl::parse(line + "&unit=1"), 1, 200ms);
   motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 200ms);
   EXPECT_FALSE(y.connected());
@@ -311,14 +316,14 @@ TEST_F(RtuOverPty, LinksToTwoUnitsOnOneDeviceShareOnePort) {
   // Other serial settings on the same device are refused, naming both.
   try {
     motion::ModbusLink z(
-        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=19200&parity=E&unit=3"), 3,
+        motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=19200&parity=E&unit=3"), 3,
         200ms);
     FAIL() << "a second link at 19200 baud joined a line at 9600 baud";
   } catch (const motion::ProfileError& e) {
-    EXPECT_NE(std::string(e.what()).find(dir_ +
-                                         "/driver is already in use at other serial "
+    EXPECT_NE(std::string(e.what()).find(driver_ +
+                                         " is already in use at other serial "
                                          "settings (modbus-rtu://" +
-                                         dir_ + "/driver?baud=9600"),
+                                         driver_ + "?baud=9600"),
               std::string::npos)
         << e.what();
   }
@@ -342,13 +347,13 @@ TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
   };
   std::mutex mutex;
   std::vector<Frame> frames;
-  const std::string line = "modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1";
+  const std::string line = "modbus-rtu://" + driver_ + "?baud=9600&parity=E&stop=1";
   motion::ModbusLink x(motion::BenchUrl::parse(line + "&unit=1"), 1, 200ms);
   // Unit 2 never answers: a short wait for it (it then closes the line).
   motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 30ms);
   modbus_mapping_t* map = modbus_mapping_new(0, 0, 16, 16);
   for (int round = 0; round < 3; ++round) {
-    modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 9600, 'E', 8, 1);
+    modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 9600, 'E', 8, 1);
     ASSERT_NE(ctx, nullptr);
     modbus_set_slave(ctx, 1);
     ASSERT_EQ(modbus_connect(ctx), 0);
@@ -397,7 +402,7 @@ TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // Without the wait, requests arrived 0.08 to 0.34 ms after the last answer
   // (measured), a tenth of it.
   // A pty ignores the baud rate, so only the driver's pacing is tested here.
-  modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 9600, 'E', 8, 1);
+  modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 9600, 'E', 8, 1);
   ASSERT_NE(ctx, nullptr);
   modbus_set_slave(ctx, 1);
   ASSERT_EQ(modbus_connect(ctx), 0);
@@ -420,7 +425,7 @@ TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
       frames.push_back({in, answering});
     });
     motion::ModbusBench bench(
-        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=9600&parity=E&stop=1"),
+        motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=9600&parity=E&stop=1"),
         profile_);
     bench.status();
     bench.move_to(1, 2);  // targets written and read back, the command written and read back
@@ -454,7 +459,7 @@ std::uint16_t modbus_crc(const std::uint8_t* data, std::size_t n) {
 TEST_F(RtuOverPty, AnAnswerFromAnotherUnitIsRefusedNamingBothUnits) {
   // The peer answers every read as unit 2, in well-formed frames with a right
   // CRC: only the unit id is wrong, and the driver must not take the answer.
-  modbus_t* ctx = modbus_new_rtu((dir_ + "/bench").c_str(), 19200, 'E', 8, 1);
+  modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 19200, 'E', 8, 1);
   ASSERT_NE(ctx, nullptr);
   ASSERT_EQ(modbus_connect(ctx), 0);
   std::atomic<int> answered{0};
@@ -482,7 +487,7 @@ TEST_F(RtuOverPty, AnAnswerFromAnotherUnitIsRefusedNamingBothUnits) {
   profile_.timing.reconnect_timeout_ms = 300;
   try {
     motion::ModbusBench bench(
-        motion::BenchUrl::parse("modbus-rtu://" + dir_ + "/driver?baud=19200&parity=E&unit=1"),
+        motion::BenchUrl::parse("modbus-rtu://" + driver_ + "?baud=19200&parity=E&unit=1"),
         profile_);
     FAIL() << "an answer from unit 2 was taken for unit 1's";
   } catch (const motion::BenchLinkError& e) {
