@@ -353,7 +353,7 @@ TEST_F(RtuOverPty, TheSilentIntervalIsKeptBetweenFramesToTwoUnitsOnOneLine) {
   motion::ModbusLink y(motion::BenchUrl::parse(line + "&unit=2"), 2, 30ms);
   modbus_mapping_t* map = modbus_mapping_new(0, 0, 16, 16);
   for (int round = 0; round < 3; ++round) {
-    modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 9600, 'E', 8, 1);
+    modbus_t* ctx = modbus_new_rtu(bench_.c_str(), 9600, 'E', 8, 1);
     ASSERT_NE(ctx, nullptr);
     modbus_set_slave(ctx, 1);
     ASSERT_EQ(modbus_connect(ctx), 0);
@@ -402,7 +402,7 @@ TEST_F(RtuOverPty, RequestsWaitTheSilentIntervalAfterEachAnswer) {
   // Without the wait, requests arrived 0.08 to 0.34 ms after the last answer
   // (measured), a tenth of it.
   // A pty ignores the baud rate, so only the driver's pacing is tested here.
-  modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 9600, 'E', 8, 1);
+  modbus_t* ctx = modbus_new_rtu(bench_.c_str(), 9600, 'E', 8, 1);
   ASSERT_NE(ctx, nullptr);
   modbus_set_slave(ctx, 1);
   ASSERT_EQ(modbus_connect(ctx), 0);
@@ -459,7 +459,7 @@ std::uint16_t modbus_crc(const std::uint8_t* data, std::size_t n) {
 TEST_F(RtuOverPty, AnAnswerFromAnotherUnitIsRefusedNamingBothUnits) {
   // The peer answers every read as unit 2, in well-formed frames with a right
   // CRC: only the unit id is wrong, and the driver must not take the answer.
-  modbus_t* ctx = modbus_new_rtu((bench_).c_str(), 19200, 'E', 8, 1);
+  modbus_t* ctx = modbus_new_rtu(bench_.c_str(), 19200, 'E', 8, 1);
   ASSERT_NE(ctx, nullptr);
   ASSERT_EQ(modbus_connect(ctx), 0);
   std::atomic<int> answered{0};
